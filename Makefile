@@ -1,0 +1,46 @@
+# door_state_recognition: one-command set-up.
+#   make demo   install what is missing, build, simulate a scene, show the result
+#   make test   install what is missing, build, run every test
+# Also: make build, make bench, make clean.
+SHELL := /bin/bash
+REPO  := $(abspath $(dir $(lastword $(MAKEFILE_LIST))))
+WS    := $(REPO)/build/.ws
+BIN   := $(REPO)/build/bin
+JOBS  ?= 2
+# Debian's ROS lives in /usr; a second python3 (pyenv) on PATH lacks the ROS
+# Python modules, so /usr/bin goes first for catkin, rostest and roslaunch.
+export PATH := /usr/bin:$(PATH)
+CATKIN_ARGS := -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 \
+               -DPython3_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=ON
+
+.PHONY: deps build test demo bench clean
+
+deps:
+	@$(REPO)/scripts/install_deps.sh
+
+build: deps
+	@mkdir -p $(WS)/src
+	@ln -sfn ../../.. $(WS)/src/door_state_recognition
+	@cd $(WS) && catkin_make -j$(JOBS) $(CATKIN_ARGS) >$(REPO)/build/catkin_make.log 2>&1 \
+	  || { tail -n 60 $(REPO)/build/catkin_make.log; echo "build failed: full log in build/catkin_make.log"; exit 1; }
+	@mkdir -p $(BIN)
+	@for exe in $(WS)/devel/lib/door_state_recognition/*; do \
+	  case "$$(basename $$exe)" in test_*) continue;; esac; [ -x "$$exe" ] && [ -f "$$exe" ] && ln -sfn "$$exe" $(BIN)/$$(basename $$exe); done; true
+	@echo "built: executables in build/bin/ ($$(ls $(BIN) | tr '\n' ' '))"
+
+test: build
+	@rm -rf $(WS)/build/test_results
+	@cd $(WS) && source devel/setup.bash && \
+	  catkin_make -j$(JOBS) $(CATKIN_ARGS) run_tests >$(REPO)/build/run_tests.log 2>&1; \
+	  grep -E "^\[  (PASSED|FAILED)  \]|^\[==========\] .* ran|Failure|rostest|FAILURE" $(REPO)/build/run_tests.log | tail -n 60; \
+	  catkin_test_results build/test_results | tail -n 1; \
+	  /usr/bin/python3 $(REPO)/scripts/test_summary.py build/test_results
+
+demo: build
+	@$(REPO)/scripts/demo.sh
+
+bench: build
+	@$(REPO)/scripts/bench.sh
+
+clean:
+	rm -rf $(REPO)/build
