@@ -1,0 +1,141 @@
+// Scene model of the simulator: a room built of oriented boxes (walls with
+// door openings, casing trim, door leaves, furniture, adjacent rooms), with the
+// ground truth of every door and decoy. ROS-free.
+//
+// World frame: gravity-aligned, z up, floor at z = 0, metres.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace dsr {
+namespace sim {
+
+// What a surface is; written as the `label` field of simulated points.
+enum class Surface : std::uint32_t {
+  None = 0,
+  Floor = 1,
+  Ceiling = 2,
+  Wall = 3,
+  Casing = 4,
+  Leaf = 5,
+  Furniture = 6,
+  Adjacent = 7,  // anything of a room seen through a doorway
+};
+
+// An oriented box: points p_world = pose * p_local, |p_local(i)| <= half(i).
+struct Box {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d half = Eigen::Vector3d::Zero();
+  Surface surface = Surface::None;
+  int owner = -1;  // door index for Leaf/Casing, furniture index, wall index
+  bool contains(const Eigen::Vector3d& p_world, double margin = 0.0) const;
+};
+
+struct DoorSpec {
+  int wall = 0;              // 0..3, see RoomSpec
+  double center = 0.0;       // along the wall from its middle, metres
+  double width = 0.9;        // clear opening, metres
+  double height = 2.05;      // clear opening, metres
+  double angle_deg = 0.0;    // 0 closed .. 180 flat against the wall
+  bool hinge_left = true;    // hinge at the wall's -u end of the opening (u: wall axis)
+  bool swing_into_room = true;  // leaf swings into the scanned room (towards the viewer)
+  double recess = 0.0;       // closed leaf set back from the face on its swing side
+};
+
+struct FurnitureSpec {
+  std::string kind = "cupboard";  // cupboard | wardrobe | table | shelf
+  int wall = 0;                   // wall it stands against (ignored by "table")
+  double center = 0.0;            // along the wall (table: x in room frame)
+  double offset = 0.0;            // table: y in room frame
+  double width = 1.0, depth = 0.5, height = 2.0;
+};
+
+// Room: interior [-width/2, width/2] x [-depth/2, depth/2] in the room frame,
+// which is yawed by `yaw` and shifted by `center` in the world.
+// Walls: 0 at y = -depth/2, 1 at x = +width/2, 2 at y = +depth/2,
+// 3 at x = -width/2. Wall axis u = n x z with n the inward normal.
+struct RoomSpec {
+  std::string name = "room";
+  double width = 5.0, depth = 4.0, height = 2.7;
+  double yaw = 0.0;
+  Eigen::Vector2d center = Eigen::Vector2d::Zero();
+  double wall_thickness = 0.15;
+  double casing_width = 0.07, casing_depth = 0.018;
+  double leaf_thickness = 0.04;
+  double adjacent_depth = 3.0;  // depth of the room behind a wall with a door
+  std::vector<DoorSpec> doors;
+  std::vector<FurnitureSpec> furniture;
+};
+
+struct DoorTruth {
+  Eigen::Vector3d opening_center;  // middle of the doorway on the floor (mid wall thickness)
+  Eigen::Vector3d hinge;           // foot of the hinge axis on the floor
+  Eigen::Vector3d wall_normal;     // horizontal unit, towards the side the leaf swings to
+  Eigen::Vector3d wall_axis;       // horizontal unit along the wall
+  double width = 0, height = 0, angle_deg = 0;
+  bool swing_into_room = true, hinge_left = true;
+  double recess = 0;
+  int wall = 0;
+  std::array<Eigen::Vector3d, 4> leaf_corners;  // mid-thickness: hinge-bottom, latch-bottom, latch-top, hinge-top
+  std::string state(double closed_below_deg = 5.0, double open_from_deg = 90.0) const;
+};
+
+struct DecoyTruth {
+  std::string kind;
+  Eigen::Vector3d center;  // centre of the box
+  double height = 0;
+  double width = 0, depth = 0;
+};
+
+struct WallTruth {
+  Eigen::Vector3d origin;  // interior face, middle of the wall, on the floor
+  Eigen::Vector3d axis;    // u, horizontal unit along the wall
+  Eigen::Vector3d normal;  // inward (into the scanned room)
+  double length = 0;       // interior length
+};
+
+struct Scene {
+  RoomSpec spec;
+  double floor_z = 0.0, ceiling_z = 2.7;
+  std::vector<Box> boxes;
+  std::vector<DoorTruth> doors;
+  std::vector<DecoyTruth> decoys;
+  std::vector<WallTruth> walls;
+  Eigen::Isometry3d room_to_world = Eigen::Isometry3d::Identity();
+  // True when p (world) is inside the scanned room's free space: inside the
+  // interior, not within `margin` of any box, and clear of inward door swings.
+  bool isFree(const Eigen::Vector3d& p, double margin) const;
+};
+
+// Builds the boxes and the truth of a room. Throws std::invalid_argument for
+// a spec that cannot be built (door outside its wall, overlapping doors,
+// opening taller than the room, angle outside [0, 180], ...).
+Scene buildScene(const RoomSpec& spec);
+
+// Options of the random scene generator.
+struct RandomSceneOptions {
+  int min_doors = 1, max_doors = 3;
+  double min_angle_deg = 0.0, max_angle_deg = 130.0;
+  int min_decoys = 1, max_decoys = 2;  // tall cupboards / wardrobes
+  bool table = true;
+  double closed_fraction = 0.3;        // share of doors drawn exactly closed
+};
+
+// A random, valid room: size, yaw, doors (hinge side, swing side, angle,
+// flush or recessed), tall cupboards/wardrobes and a table. Deterministic for
+// a seed.
+RoomSpec randomRoom(std::uint64_t seed, const RandomSceneOptions& options = {});
+
+// Scenes shaped like the seed paper's three: "paper_livingroom" (one closed
+// door and one other object on a wall), "paper_house" (a door open ~110 deg),
+// "paper_multidoor" (two semi-open doors at ~7 and ~25 deg). Throws
+// std::invalid_argument for another name.
+RoomSpec paperRoom(const std::string& name);
+std::vector<std::string> paperRoomNames();
+
+}  // namespace sim
+}  // namespace dsr

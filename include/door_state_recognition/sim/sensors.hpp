@@ -1,0 +1,68 @@
+// Simulated sensors: a terrestrial laser scanner (TLS) and an RGB-D camera,
+// both ray casting into a sim::Scene. ROS-free; deterministic for a seed
+// whatever the number of threads.
+#pragma once
+
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "door_state_recognition/sim/scene.hpp"
+
+namespace dsr {
+namespace sim {
+
+struct TlsOptions {
+  std::size_t points = 400000;     // rays over all viewpoints (returns are fewer with dropout)
+  int viewpoints = 1;              // scan positions inside the room
+  double range_sigma = 0.005;      // Gaussian range noise, metres (0: none)
+  double dropout = 0.0;            // probability that a return is lost
+  double min_elevation_deg = -60;  // below that the tripod hides the floor
+  double max_range = 80.0;
+  std::uint64_t seed = 1;
+};
+
+struct RgbdOptions {
+  int width = 640, height = 480;
+  double fx = 525.0, fy = 525.0, cx = 319.5, cy = 239.5;  // Kinect-like intrinsics
+  double min_range = 0.5, max_range = 4.5;                // along the optical axis, metres
+  bool noise = true;               // depth noise sigma(z) = 0.0012 + 0.0019 (z - 0.4)^2
+  double dropout = 0.02;           // random missing returns
+  double max_incidence_deg = 80;   // steeper grazing angles return nothing
+  int target_door = -1;            // door the camera looks at (-1: chosen by the seed)
+  bool avoid_ceiling = true;       // pitch so that no ceiling is in view
+  std::uint64_t seed = 1;
+};
+
+struct SimulatedCloud {
+  // Points in the sensor frame. TLS: unorganized, finite points only.
+  // RGB-D: organized width x height, NaN where no return.
+  // label = sim::Surface of the surface hit (ground truth, never an input).
+  pcl::PointCloud<pcl::PointXYZL> cloud;
+  Eigen::Isometry3d sensor_to_world = Eigen::Isometry3d::Identity();  // pose of the cloud frame
+  std::string sensor;    // "tls" | "rgbd"
+  std::string frame_id;  // "tls_scanner" | "camera_depth_optical_frame"
+  std::vector<Eigen::Vector3d> viewpoints_world;
+  RgbdOptions rgbd;      // intrinsics used (RGB-D only)
+};
+
+struct RayHit {
+  bool hit = false;
+  double t = 0.0;
+  Surface surface = Surface::None;
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // of the face hit, world
+};
+
+// Nearest hit of the ray origin + t * dir (dir unit), t in (0, max_t].
+RayHit castRay(const Scene& scene, const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double max_t);
+
+// Throws std::invalid_argument on absurd options or when no free scan
+// position exists.
+SimulatedCloud scanTls(const Scene& scene, const TlsOptions& options);
+SimulatedCloud captureRgbd(const Scene& scene, const RgbdOptions& options);
+
+}  // namespace sim
+}  // namespace dsr

@@ -1,0 +1,348 @@
+// Proves the scene simulator right: determinism, door geometry, the sensors'
+// models and the ground truth's frame. Every randomised case names its seed.
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+
+#include "door_state_recognition/sim/ground_truth.hpp"
+#include "door_state_recognition/sim/scene.hpp"
+#include "door_state_recognition/sim/sensors.hpp"
+
+using namespace dsr::sim;
+
+namespace {
+
+std::string seedTrace(std::uint64_t seed) { return "seed=" + std::to_string(seed); }
+
+std::vector<Eigen::Vector3d> boxCorners(const Box& b) {
+  std::vector<Eigen::Vector3d> out;
+  for (int i = 0; i < 8; ++i)
+    out.push_back(b.pose * Eigen::Vector3d((i & 1 ? 1 : -1) * b.half.x(), (i & 2 ? 1 : -1) * b.half.y(),
+                                           (i & 4 ? 1 : -1) * b.half.z()));
+  return out;
+}
+
+const Box& leafOf(const Scene& s, int door) {
+  for (const Box& b : s.boxes)
+    if (b.surface == Surface::Leaf && b.owner == door) return b;
+  throw std::runtime_error("no leaf");
+}
+
+// Coordinates of p in the frame of wall w: (s along, d along inward normal, z).
+Eigen::Vector3d inWall(const Scene& s, int w, const Eigen::Vector3d& p) {
+  const WallTruth& wt = s.walls[w];
+  const Eigen::Vector3d q = p - wt.origin;
+  return {q.dot(wt.axis), q.dot(wt.normal), q.z()};
+}
+
+// Unit normal of the best-fit plane through points (smallest eigenvector).
+Eigen::Vector3d planeNormal(const std::vector<Eigen::Vector3d>& pts) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& p : pts) mean += p;
+  mean /= pts.size();
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  for (const auto& p : pts) C += (p - mean) * (p - mean).transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
+  return es.eigenvectors().col(0);
+}
+
+RoomSpec oneDoorRoom(double angle, bool hinge_left, bool into_room, double recess) {
+  RoomSpec r;
+  r.name = "test";
+  r.width = 5;
+  r.depth = 4;
+  r.height = 2.6;
+  r.yaw = 0.4;
+  r.center = Eigen::Vector2d(1.0, -2.0);
+  DoorSpec d;
+  d.wall = 1;
+  d.center = 0.3;
+  d.width = 0.9;
+  d.height = 2.05;
+  d.angle_deg = angle;
+  d.hinge_left = hinge_left;
+  d.swing_into_room = into_room;
+  d.recess = recess;
+  r.doors.push_back(d);
+  return r;
+}
+
+}  // namespace
+
+TEST(Simulator, SameSeedSameCloudDifferentSeedDifferentCloud) {
+  TlsOptions o;
+  o.points = 20000;
+  o.seed = 42;
+  const Scene a = buildScene(randomRoom(42));
+  const SimulatedCloud c1 = scanTls(a, o), c2 = scanTls(buildScene(randomRoom(42)), o);
+  ASSERT_EQ(c1.cloud.size(), c2.cloud.size());
+  ASSERT_GT(c1.cloud.size(), 15000u);
+  for (std::size_t i = 0; i < c1.cloud.size(); ++i) {
+    ASSERT_EQ(c1.cloud[i].x, c2.cloud[i].x) << "point " << i;
+    ASSERT_EQ(c1.cloud[i].y, c2.cloud[i].y);
+    ASSERT_EQ(c1.cloud[i].z, c2.cloud[i].z);
+    ASSERT_EQ(c1.cloud[i].label, c2.cloud[i].label);
+  }
+  o.seed = 43;
+  const SimulatedCloud c3 = scanTls(buildScene(randomRoom(43)), o);
+  bool differ = c3.cloud.size() != c1.cloud.size();
+  for (std::size_t i = 0; !differ && i < c1.cloud.size(); ++i) differ = c1.cloud[i].x != c3.cloud[i].x;
+  EXPECT_TRUE(differ);
+}
+
+TEST(Simulator, ClosedLeafLiesInsideItsOpening) {
+  for (bool hinge_left : {true, false})
+    for (bool into_room : {true, false})
+      for (double recess : {0.0, 0.05}) {
+        SCOPED_TRACE(::testing::Message() << "hinge_left=" << hinge_left << " into_room=" << into_room
+                                          << " recess=" << recess);
+        const Scene s = buildScene(oneDoorRoom(0.0, hinge_left, into_room, recess));
+        const DoorSpec& d = s.spec.doors[0];
+        const double t = s.spec.wall_thickness;
+        for (const Eigen::Vector3d& c : boxCorners(leafOf(s, 0))) {
+          const Eigen::Vector3d q = inWall(s, 1, c);
+          EXPECT_GE(q.x(), d.center - d.width / 2 - 1e-9);
+          EXPECT_LE(q.x(), d.center + d.width / 2 + 1e-9);
+          EXPECT_GE(q.y(), -t - 1e-9);
+          EXPECT_LE(q.y(), 1e-9);
+          EXPECT_GE(q.z(), 0.0);
+          EXPECT_LE(q.z(), d.height);
+        }
+        // The face on the swing side is flush with that wall face, or set back by the recess.
+        double swing_face = into_room ? -1e9 : 1e9;
+        for (const Eigen::Vector3d& c : boxCorners(leafOf(s, 0)))
+          swing_face = into_room ? std::max(swing_face, inWall(s, 1, c).y()) : std::min(swing_face, inWall(s, 1, c).y());
+        EXPECT_NEAR(swing_face, into_room ? -recess : -t + recess, 1e-9);
+        EXPECT_EQ(s.doors[0].state(), "closed");
+      }
+}
+
+TEST(Simulator, ScannedLeafPointsOfAClosedDoorLieInTheOpening) {
+  const std::uint64_t seed = 7;
+  SCOPED_TRACE(seedTrace(seed));
+  const Scene s = buildScene(oneDoorRoom(0.0, true, false, 0.02));
+  TlsOptions o;
+  o.points = 200000;
+  o.seed = seed;
+  const SimulatedCloud c = scanTls(s, o);
+  const DoorSpec& d = s.spec.doors[0];
+  int leaf_points = 0;
+  for (const auto& p : c.cloud) {
+    if (p.label != static_cast<std::uint32_t>(Surface::Leaf)) continue;
+    ++leaf_points;
+    const Eigen::Vector3d q = inWall(s, 1, c.sensor_to_world * Eigen::Vector3d(p.x, p.y, p.z));
+    EXPECT_GT(q.x(), d.center - d.width / 2 - 0.02);
+    EXPECT_LT(q.x(), d.center + d.width / 2 + 0.02);
+    EXPECT_GT(q.y(), -s.spec.wall_thickness - 0.02);
+    EXPECT_LT(q.y(), 0.02);
+  }
+  EXPECT_GT(leaf_points, 200);
+}
+
+TEST(Simulator, DoorAtNinetyDegreesIsPerpendicularToItsWall) {
+  for (bool hinge_left : {true, false})
+    for (bool into_room : {true, false}) {
+      SCOPED_TRACE(::testing::Message() << "hinge_left=" << hinge_left << " into_room=" << into_room);
+      const Scene s = buildScene(oneDoorRoom(90.0, hinge_left, into_room, 0.0));
+      const DoorTruth& g = s.doors[0];
+      const Eigen::Vector3d along_leaf = (g.leaf_corners[1] - g.leaf_corners[0]).normalized();
+      EXPECT_NEAR(along_leaf.dot(s.walls[1].axis), 0.0, 1e-9);
+      EXPECT_NEAR(along_leaf.dot(g.wall_normal), 1.0, 1e-9);  // sticks out to its swing side
+      EXPECT_EQ(g.state(), "open");
+      if (!into_room) continue;  // the scanner sees only leaves in its own room well
+      TlsOptions o;
+      o.points = 300000;
+      o.seed = 11;
+      const SimulatedCloud c = scanTls(s, o);
+      std::vector<Eigen::Vector3d> pts;
+      for (const auto& p : c.cloud)
+        if (p.label == static_cast<std::uint32_t>(Surface::Leaf)) pts.push_back(c.sensor_to_world * Eigen::Vector3d(p.x, p.y, p.z));
+      ASSERT_GT(pts.size(), 200u);
+      EXPECT_LT(std::abs(planeNormal(pts).dot(s.walls[1].normal)), 0.03);
+    }
+}
+
+TEST(Simulator, OpeningAngleRotatesTheLeafAboutTheHinge) {
+  for (double angle : {0.0, 30.0, 110.0, 180.0}) {
+    const Scene s = buildScene(oneDoorRoom(angle, false, true, 0.0));
+    const DoorTruth& g = s.doors[0];
+    const Eigen::Vector3d closed_dir = -s.walls[1].axis;  // right hinge: towards -u
+    const Eigen::Vector3d leaf_dir = (g.leaf_corners[1] - g.leaf_corners[0]).normalized();
+    EXPECT_NEAR(std::acos(std::max(-1.0, std::min(1.0, leaf_dir.dot(closed_dir)))) * 180 / M_PI, angle, 1e-6);
+    EXPECT_GE(leaf_dir.dot(g.wall_normal), -1e-9);  // never swings through the wall
+  }
+}
+
+TEST(Simulator, StatesFollowTheThresholds) {
+  DoorTruth d;
+  d.angle_deg = 4.99;
+  EXPECT_EQ(d.state(), "closed");
+  d.angle_deg = 5.0;
+  EXPECT_EQ(d.state(), "semi_open");
+  d.angle_deg = 89.9;
+  EXPECT_EQ(d.state(), "semi_open");
+  d.angle_deg = 90.0;
+  EXPECT_EQ(d.state(), "open");
+}
+
+TEST(Simulator, RgbdFrameFollowsThePinholeModel) {
+  for (std::uint64_t seed : {3ull, 8ull, 21ull}) {
+    SCOPED_TRACE(seedTrace(seed));
+    const Scene s = buildScene(randomRoom(seed));
+    RgbdOptions o;
+    o.seed = seed;
+    const SimulatedCloud c = captureRgbd(s, o);
+    ASSERT_EQ(c.cloud.width, 640u);
+    ASSERT_EQ(c.cloud.height, 480u);
+    std::size_t finite = 0, ceiling = 0;
+    for (std::uint32_t v = 0; v < c.cloud.height; ++v)
+      for (std::uint32_t u = 0; u < c.cloud.width; ++u) {
+        const auto& p = c.cloud.at(u, v);
+        if (!std::isfinite(p.z)) continue;
+        ++finite;
+        ceiling += p.label == static_cast<std::uint32_t>(Surface::Ceiling);
+        ASSERT_GE(p.z, o.min_range * 0.95);
+        ASSERT_LE(p.z, o.max_range * 1.05);
+        ASSERT_NEAR(o.fx * p.x / p.z + o.cx, u, 1e-2) << "u=" << u << " v=" << v;
+        ASSERT_NEAR(o.fy * p.y / p.z + o.cy, v, 1e-2) << "u=" << u << " v=" << v;
+      }
+    EXPECT_GT(finite, 640u * 480u / 3);
+    EXPECT_LT(finite, 640u * 480u);  // dropout and out-of-range returns are missing
+    EXPECT_EQ(ceiling, 0u);
+    // Optical frame: up is roughly -y.
+    const Eigen::Vector3d up = c.sensor_to_world.linear().transpose() * Eigen::Vector3d::UnitZ();
+    EXPECT_LT(up.y(), -0.8);
+  }
+}
+
+TEST(Simulator, DepthNoiseGrowsWithRange) {
+  // The same frame with and without noise: the depth residuals follow
+  // sigma(z) = 0.0012 + 0.0019 (z - 0.4)^2, small near, large far.
+  const std::uint64_t seed = 12;
+  SCOPED_TRACE(seedTrace(seed));
+  const Scene s = buildScene(randomRoom(seed));
+  RgbdOptions o;
+  o.seed = seed;
+  o.dropout = 0;
+  o.noise = true;
+  const SimulatedCloud noisy = captureRgbd(s, o);
+  o.noise = false;
+  const SimulatedCloud clean = captureRgbd(s, o);
+  double sum[2] = {0, 0};
+  std::size_t n[2] = {0, 0};
+  for (std::size_t i = 0; i < clean.cloud.size(); ++i) {
+    const double z = clean.cloud[i].z;
+    if (!std::isfinite(z) || !std::isfinite(noisy.cloud[i].z)) continue;
+    const int bucket = z < 2.0 ? 0 : (z > 3.0 && z < 4.5 ? 1 : -1);
+    if (bucket < 0) continue;
+    sum[bucket] += std::pow(noisy.cloud[i].z - z, 2);
+    ++n[bucket];
+  }
+  ASSERT_GT(n[0], 1000u);
+  ASSERT_GT(n[1], 1000u);
+  const double near_rms = std::sqrt(sum[0] / n[0]), far_rms = std::sqrt(sum[1] / n[1]);
+  EXPECT_LT(near_rms, 0.0012 + 0.0019 * std::pow(2.0 - 0.4, 2));
+  EXPECT_GT(far_rms, 0.0012 + 0.0019 * std::pow(3.0 - 0.4, 2) * 0.9);
+  EXPECT_LT(far_rms, 0.0012 + 0.0019 * std::pow(4.5 - 0.4, 2));
+}
+
+TEST(Simulator, RandomRoomsBuildAndHoldWhatTheyPromise) {
+  for (std::uint64_t seed = 100; seed < 160; ++seed) {
+    SCOPED_TRACE(seedTrace(seed));
+    const RoomSpec r = randomRoom(seed);
+    Scene s;
+    ASSERT_NO_THROW(s = buildScene(r));
+    EXPECT_GE(s.doors.size(), 1u);
+    EXPECT_LE(s.doors.size(), 3u);
+    int tall = 0;
+    for (const DecoyTruth& d : s.decoys) tall += (d.kind == "cupboard" || d.kind == "wardrobe") && d.height >= 1.85;
+    EXPECT_GE(tall, 1);
+    // No furniture inside a leaf's swing or a doorway: leaf corners are clear of furniture boxes.
+    for (std::size_t i = 0; i < s.doors.size(); ++i)
+      for (const Box& b : s.boxes)
+        if (b.surface == Surface::Furniture)
+          for (const auto& c : boxCorners(leafOf(s, static_cast<int>(i)))) EXPECT_FALSE(b.contains(c)) << "door " << i;
+  }
+}
+
+TEST(Simulator, SeveralDoorsPerWallAndAdjacentRoomVisible) {
+  const Scene s = buildScene(paperRoom("paper_multidoor"));
+  ASSERT_EQ(s.doors.size(), 2u);
+  EXPECT_EQ(s.doors[0].wall, s.doors[1].wall);
+  TlsOptions o;
+  o.points = 200000;
+  const SimulatedCloud c = scanTls(s, o);
+  std::size_t adjacent = 0;
+  for (const auto& p : c.cloud) adjacent += p.label == static_cast<std::uint32_t>(Surface::Adjacent);
+  EXPECT_GT(adjacent, 50u);  // seen through the ajar doors
+}
+
+TEST(Simulator, RejectsImpossibleScenes) {
+  RoomSpec r = oneDoorRoom(0, true, true, 0);
+  r.doors[0].center = 10;  // outside its wall
+  EXPECT_THROW(buildScene(r), std::invalid_argument);
+  r = oneDoorRoom(200, true, true, 0);
+  EXPECT_THROW(buildScene(r), std::invalid_argument);
+  r = oneDoorRoom(0, true, true, 0);
+  r.doors.push_back(r.doors[0]);  // same place twice
+  EXPECT_THROW(buildScene(r), std::invalid_argument);
+  r = oneDoorRoom(0, true, true, 0);
+  r.doors[0].height = 3.0;  // taller than the room
+  EXPECT_THROW(buildScene(r), std::invalid_argument);
+  r = oneDoorRoom(0, true, true, 0.5);  // recess deeper than the wall
+  EXPECT_THROW(buildScene(r), std::invalid_argument);
+  TlsOptions o;
+  o.points = 10;
+  EXPECT_THROW(scanTls(buildScene(oneDoorRoom(0, true, true, 0)), o), std::invalid_argument);
+}
+
+TEST(Simulator, RayCastMeetsTheWallAtItsDistance) {
+  RoomSpec r;
+  r.width = 6;
+  r.depth = 4;
+  r.height = 2.5;
+  const Scene s = buildScene(r);
+  const RayHit h = castRay(s, Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(1, 0, 0), 100);
+  ASSERT_TRUE(h.hit);
+  EXPECT_NEAR(h.t, 3.0, 1e-9);
+  EXPECT_EQ(h.surface, Surface::Wall);
+  EXPECT_NEAR(h.normal.x(), -1.0, 1e-9);
+  const RayHit up = castRay(s, Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0, 0, 1), 100);
+  EXPECT_NEAR(up.t, 1.5, 1e-9);
+  EXPECT_EQ(up.surface, Surface::Ceiling);
+}
+
+TEST(GroundTruth, IsExpressedInTheCloudFrame) {
+  const std::uint64_t seed = 31;
+  SCOPED_TRACE(seedTrace(seed));
+  const Scene s = buildScene(randomRoom(seed));
+  for (const std::string sensor : {"tls", "rgbd"}) {
+    SimulatedCloud c;
+    if (sensor == "tls") {
+      TlsOptions o;
+      o.points = 5000;
+      o.seed = seed;
+      c = scanTls(s, o);
+    } else {
+      RgbdOptions o;
+      o.seed = seed;
+      c = captureRgbd(s, o);
+    }
+    const nlohmann::json j = groundTruthJson(s, c);
+    EXPECT_EQ(j["sensor"], sensor);
+    ASSERT_EQ(j["doors"].size(), s.doors.size());
+    for (std::size_t i = 0; i < s.doors.size(); ++i) {
+      const auto& oc = j["doors"][i]["opening_center"];
+      const Eigen::Vector3d back = c.sensor_to_world * Eigen::Vector3d(oc[0], oc[1], oc[2]);
+      EXPECT_LT((back - s.doors[i].opening_center).norm(), 1e-9);
+      EXPECT_EQ(j["doors"][i]["state"], s.doors[i].state());
+    }
+    const Eigen::Vector3d up(j["up"][0], j["up"][1], j["up"][2]);
+    EXPECT_NEAR(up.norm(), 1.0, 1e-9);
+    // The floor height along up matches the opening centre (on the floor).
+    const auto& oc = j["doors"][0]["opening_center"];
+    EXPECT_NEAR(up.dot(Eigen::Vector3d(oc[0], oc[1], oc[2])), j["floor"].get<double>(), 1e-9);
+    if (sensor == "tls") EXPECT_NEAR(up.z(), 1.0, 1e-12);
+  }
+}

@@ -1,0 +1,55 @@
+#include "bag_writer.hpp"
+
+#include <pcl_conversions/pcl_conversions.h>
+#include <rosbag/bag.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <tf2_msgs/TFMessage.h>
+
+#include <stdexcept>
+
+namespace dsr {
+namespace tools {
+
+void writeBag(const std::string& path, const sim::SimulatedCloud& sim, const BagOptions& o) {
+  if (o.count < 1 || !(o.rate_hz > 0)) throw std::runtime_error("bag: count must be >= 1 and rate > 0");
+  try {
+    rosbag::Bag bag(path, rosbag::bagmode::Write);
+    const ros::Time t0(o.start_time);
+
+    geometry_msgs::TransformStamped tf;
+    tf.header.stamp = t0;
+    tf.header.frame_id = o.fixed_frame;
+    tf.child_frame_id = sim.frame_id;
+    const Eigen::Vector3d t = sim.sensor_to_world.translation();
+    const Eigen::Quaterniond q(sim.sensor_to_world.linear());
+    tf.transform.translation.x = t.x();
+    tf.transform.translation.y = t.y();
+    tf.transform.translation.z = t.z();
+    tf.transform.rotation.x = q.x();
+    tf.transform.rotation.y = q.y();
+    tf.transform.rotation.z = q.z();
+    tf.transform.rotation.w = q.w();
+    tf2_msgs::TFMessage tfm;
+    tfm.transforms.push_back(tf);
+    auto latched = boost::make_shared<ros::M_string>();
+    (*latched)["latching"] = "1";
+    (*latched)["callerid"] = "/door_scene_sim";
+    bag.write("/tf_static", t0, tfm, latched);
+
+    sensor_msgs::PointCloud2 msg;
+    pcl::toROSMsg(sim.cloud, msg);
+    msg.header.frame_id = sim.frame_id;
+    for (int i = 0; i < o.count; ++i) {
+      const ros::Time stamp = t0 + ros::Duration(0.05 + i / o.rate_hz);
+      msg.header.stamp = stamp;
+      msg.header.seq = i;
+      bag.write("/points", stamp, msg);
+    }
+    bag.close();
+  } catch (const std::exception& e) {
+    throw std::runtime_error("bag: cannot write " + path + ": " + e.what());
+  }
+}
+
+}  // namespace tools
+}  // namespace dsr
