@@ -1,0 +1,55 @@
+// Scores a door-state report (pipeline CLI output) against simulator ground
+// truth. Both JSON documents use the cloud's own frame (metres, degrees).
+#pragma once
+
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace dsr {
+namespace eval {
+
+// One truth door paired with one reported door.
+struct DoorMatch {
+  int truth_index;           // index into truth["doors"]
+  int report_index;          // index into report["doors"]
+  double center_distance_m;  // horizontal distance between opening centres
+  bool state_correct;        // state strings equal
+  double angle_error_deg;    // |reported - true| opening angle
+  double hinge_error_m;      // 3D distance between hinges
+};
+
+struct EvalResult {
+  int true_doors = 0, reported_doors = 0, matched = 0, state_correct = 0;
+  std::vector<DoorMatch> matches;     // sorted by truth_index (per scene)
+  std::vector<int> missed_truth;      // truth indices without a match
+  std::vector<int> unmatched_report;  // report indices without a match (false positives)
+
+  double precision() const;          // matched / reported; 1.0 when reported == 0
+  double recall() const;             // matched / true; 1.0 when true == 0
+  double stateAccuracy() const;      // state_correct / matched; NaN when matched == 0
+  double angleMaeDeg() const;        // mean angle error; NaN when no matches
+  double hingeErrorMeanM() const;    // mean hinge error; NaN when no matches
+  double hingeErrorMedianM() const;  // median hinge error; NaN when no matches
+};
+
+// Matches reported doors to truth doors one-to-one. Distance between opening
+// centres is horizontal: the component along the truth's "up" (normalised,
+// default [0,0,1]) is removed. Pairs with distance <= max_center_distance_m are
+// eligible and assigned greedily by increasing distance (ties: lower truth
+// index, then lower report index).
+// Throws std::invalid_argument (message names the document and field, e.g.
+// "report.doors[1].hinge: ...") when a needed field is missing or mistyped, or
+// when max_center_distance_m is negative or not finite.
+EvalResult evaluate(const nlohmann::json& truth, const nlohmann::json& report,
+                    double max_center_distance_m = 0.5);
+
+// Counts, the six figures (NaN -> null), matches, missed_truth, unmatched_report.
+nlohmann::json toJson(const EvalResult& result);
+
+// Sums several results: counts add up; matches, missed_truth and
+// unmatched_report are concatenated (their indices stay per scene).
+EvalResult merge(const std::vector<EvalResult>& results);
+
+}  // namespace eval
+}  // namespace dsr

@@ -1,0 +1,321 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "door_state_recognition/eval/evaluation.hpp"
+
+using dsr::eval::evaluate;
+using dsr::eval::EvalResult;
+using nlohmann::json;
+
+namespace {
+
+json vec(double x, double y, double z) { return json::array({x, y, z}); }
+
+json truthDoor(json center, json hinge, double angle, const std::string& state) {
+  return {{"opening_center", center}, {"hinge", hinge}, {"width", 0.9}, {"height", 2.0},
+          {"opening_angle_deg", angle}, {"state", state}, {"swing", "toward_viewer"}, {"extra", 1}};
+}
+
+json reportDoor(int id, json center, json hinge, double angle, const std::string& state) {
+  return {{"id", id}, {"wall_id", nullptr}, {"state", state}, {"opening_angle_deg", angle},
+          {"confidence", 0.8}, {"hinge", hinge}, {"opening_center", center}, {"width", 0.9},
+          {"height", 2.0}, {"swing", "unknown"}};
+}
+
+json truthDoc(json doors, json up = vec(0, 0, 1)) {
+  return {{"scene", "t"}, {"sensor", "tls"}, {"up", up}, {"floor", 0.0}, {"ceiling", 2.5},
+          {"doors", doors}, {"decoys", json::array()}};
+}
+
+json reportDoc(json doors) {
+  return {{"input", "x.pcd"}, {"points_in", 10}, {"points_used", 10}, {"up", vec(0, 0, 1)},
+          {"floor", nullptr}, {"ceiling", nullptr}, {"walls", json::array()}, {"doors", doors},
+          {"others", json::array()}, {"timing_ms", json::object()}};
+}
+
+// One truth door at the origin (hinge at -0.45 x), one reported door at `c`.
+EvalResult single(json c, json up = vec(0, 0, 1)) {
+  json t = truthDoc({truthDoor(vec(0, 0, 0), vec(-0.45, 0, 0), 30, "semi_open")}, up);
+  json r = reportDoc({reportDoor(0, c, vec(-0.45, 0, 0), 30, "semi_open")});
+  return evaluate(t, r);
+}
+
+}  // namespace
+
+TEST(Evaluation, ExactMatch) {
+  EvalResult r = single(vec(0, 0, 0));
+  EXPECT_EQ(r.true_doors, 1);
+  EXPECT_EQ(r.reported_doors, 1);
+  EXPECT_EQ(r.matched, 1);
+  EXPECT_EQ(r.state_correct, 1);
+  ASSERT_EQ(r.matches.size(), 1u);
+  EXPECT_EQ(r.matches[0].truth_index, 0);
+  EXPECT_EQ(r.matches[0].report_index, 0);
+  EXPECT_DOUBLE_EQ(r.matches[0].center_distance_m, 0.0);
+  EXPECT_DOUBLE_EQ(r.precision(), 1.0);
+  EXPECT_DOUBLE_EQ(r.recall(), 1.0);
+  EXPECT_DOUBLE_EQ(r.stateAccuracy(), 1.0);
+  EXPECT_DOUBLE_EQ(r.angleMaeDeg(), 0.0);
+  EXPECT_DOUBLE_EQ(r.hingeErrorMeanM(), 0.0);
+  EXPECT_DOUBLE_EQ(r.hingeErrorMedianM(), 0.0);
+  EXPECT_TRUE(r.missed_truth.empty());
+  EXPECT_TRUE(r.unmatched_report.empty());
+}
+
+TEST(Evaluation, VerticalOffsetIgnoredZUp) {
+  EvalResult r = single(vec(0.49, 0, 2.0));
+  ASSERT_EQ(r.matched, 1);
+  EXPECT_NEAR(r.matches[0].center_distance_m, 0.49, 1e-12);
+}
+
+TEST(Evaluation, VerticalOffsetIgnoredCameraFrameYDown) {
+  // Camera frame: up = -y, so a 2 m offset along y is vertical.
+  EvalResult r = single(vec(0.49, 2.0, 0), vec(0, -1, 0));
+  ASSERT_EQ(r.matched, 1);
+  EXPECT_NEAR(r.matches[0].center_distance_m, 0.49, 1e-12);
+  // Same offset with horizontal x/z split, and non-unit up gets normalised.
+  r = single(vec(0.24, -2.0, 0.32), vec(0, -3, 0));
+  ASSERT_EQ(r.matched, 1);
+  EXPECT_NEAR(r.matches[0].center_distance_m, 0.4, 1e-12);
+  // With the default z-up, the y offset is horizontal: no match.
+  EXPECT_EQ(single(vec(0.49, 2.0, 0)).matched, 0);
+}
+
+TEST(Evaluation, MissingUpDefaultsToZ) {
+  json t = truthDoc({truthDoor(vec(0, 0, 0), vec(0, 0, 0), 0, "closed")});
+  t.erase("up");
+  json r = reportDoc({reportDoor(0, vec(0.2, 0, 3.0), vec(0, 0, 0), 0, "closed")});
+  EXPECT_EQ(evaluate(t, r).matched, 1);
+}
+
+TEST(Evaluation, TooFarDoesNotMatch) {
+  EvalResult r = single(vec(0.51, 0, 0));
+  EXPECT_EQ(r.matched, 0);
+  EXPECT_EQ(r.missed_truth, std::vector<int>{0});
+  EXPECT_EQ(r.unmatched_report, std::vector<int>{0});
+  EXPECT_DOUBLE_EQ(r.precision(), 0.0);
+  EXPECT_DOUBLE_EQ(r.recall(), 0.0);
+  EXPECT_TRUE(std::isnan(r.stateAccuracy()));
+  // A larger threshold lets it match.
+  json t = truthDoc({truthDoor(vec(0, 0, 0), vec(0, 0, 0), 0, "closed")});
+  json rep = reportDoc({reportDoor(0, vec(0.51, 0, 0), vec(0, 0, 0), 0, "closed")});
+  EXPECT_EQ(evaluate(t, rep, 0.6).matched, 1);
+  EXPECT_THROW(evaluate(t, rep, -0.1), std::invalid_argument);
+}
+
+TEST(Evaluation, CrossedOrderMatchesNearest) {
+  json t = truthDoc({truthDoor(vec(0, 0, 0), vec(0, 0, 0), 0, "closed"),
+                     truthDoor(vec(3, 0, 0), vec(3, 0, 0), 90, "open")});
+  json r = reportDoc({reportDoor(0, vec(3.1, 0, 0), vec(3, 0, 0), 90, "open"),
+                      reportDoor(1, vec(0.2, 0, 0), vec(0, 0, 0), 0, "closed")});
+  EvalResult res = evaluate(t, r, 5.0);
+  ASSERT_EQ(res.matched, 2);
+  EXPECT_EQ(res.matches[0].truth_index, 0);
+  EXPECT_EQ(res.matches[0].report_index, 1);
+  EXPECT_EQ(res.matches[1].truth_index, 1);
+  EXPECT_EQ(res.matches[1].report_index, 0);
+  EXPECT_EQ(res.state_correct, 2);
+}
+
+TEST(Evaluation, GreedyTakesGloballyNearestPairFirst) {
+  // Truth 0 at x=0, truth 1 at x=1; report 0 at x=0.7 is nearest to truth 1 (0.3),
+  // so truth 1 takes it even though truth 0 comes first; truth 0 gets report 1.
+  json t = truthDoc({truthDoor(vec(0, 0, 0), vec(0, 0, 0), 0, "closed"),
+                     truthDoor(vec(1, 0, 0), vec(1, 0, 0), 0, "closed")});
+  json r = reportDoc({reportDoor(0, vec(0.7, 0, 0), vec(0, 0, 0), 0, "closed"),
+                      reportDoor(1, vec(1.5, 0, 0), vec(0, 0, 0), 0, "closed")});
+  EvalResult res = evaluate(t, r, 2.0);
+  ASSERT_EQ(res.matched, 2);
+  EXPECT_EQ(res.matches[0].report_index, 1);
+  EXPECT_NEAR(res.matches[0].center_distance_m, 1.5, 1e-12);
+  EXPECT_EQ(res.matches[1].report_index, 0);
+  EXPECT_NEAR(res.matches[1].center_distance_m, 0.3, 1e-12);
+}
+
+TEST(Evaluation, TiesBrokenByLowerIndex) {
+  json t = truthDoc({truthDoor(vec(0, 0, 0), vec(0, 0, 0), 0, "closed")});
+  json r = reportDoc({reportDoor(0, vec(0.2, 0, 0), vec(0, 0, 0), 0, "closed"),
+                      reportDoor(1, vec(-0.2, 0, 0), vec(0, 0, 0), 0, "closed")});
+  EvalResult res = evaluate(t, r);
+  ASSERT_EQ(res.matched, 1);
+  EXPECT_EQ(res.matches[0].report_index, 0);
+  EXPECT_EQ(res.unmatched_report, std::vector<int>{1});
+}
+
+TEST(Evaluation, FalsePositiveHalvesPrecision) {
+  json t = truthDoc({truthDoor(vec(0, 0, 0), vec(0, 0, 0), 0, "closed")});
+  json r = reportDoc({reportDoor(0, vec(0, 0, 0), vec(0, 0, 0), 0, "closed"),
+                      reportDoor(1, vec(5, 5, 0), vec(5, 5, 0), 0, "closed")});
+  EvalResult res = evaluate(t, r);
+  EXPECT_DOUBLE_EQ(res.precision(), 0.5);
+  EXPECT_DOUBLE_EQ(res.recall(), 1.0);
+  EXPECT_EQ(res.unmatched_report, std::vector<int>{1});
+}
+
+TEST(Evaluation, MissedDoorLowersRecall) {
+  json t = truthDoc({truthDoor(vec(0, 0, 0), vec(0, 0, 0), 0, "closed"),
+                     truthDoor(vec(4, 0, 0), vec(4, 0, 0), 0, "closed"),
+                     truthDoor(vec(8, 0, 0), vec(8, 0, 0), 0, "closed")});
+  json r = reportDoc({reportDoor(0, vec(4, 0, 0), vec(4, 0, 0), 0, "closed")});
+  EvalResult res = evaluate(t, r);
+  EXPECT_DOUBLE_EQ(res.precision(), 1.0);
+  EXPECT_NEAR(res.recall(), 1.0 / 3.0, 1e-12);
+  EXPECT_EQ(res.missed_truth, (std::vector<int>{0, 2}));
+}
+
+TEST(Evaluation, WrongStateStillMatched) {
+  json t = truthDoc({truthDoor(vec(0, 0, 0), vec(0, 0, 0), 10, "semi_open"),
+                     truthDoor(vec(4, 0, 0), vec(4, 0, 0), 0, "closed")});
+  json r = reportDoc({reportDoor(0, vec(0, 0, 0), vec(0, 0, 0), 10, "open"),
+                      reportDoor(1, vec(4, 0, 0), vec(4, 0, 0), 0, "closed")});
+  EvalResult res = evaluate(t, r);
+  EXPECT_EQ(res.matched, 2);
+  EXPECT_EQ(res.state_correct, 1);
+  EXPECT_FALSE(res.matches[0].state_correct);
+  EXPECT_TRUE(res.matches[1].state_correct);
+  EXPECT_DOUBLE_EQ(res.stateAccuracy(), 0.5);
+  EXPECT_DOUBLE_EQ(res.precision(), 1.0);
+  EXPECT_DOUBLE_EQ(res.recall(), 1.0);
+}
+
+TEST(Evaluation, AngleAndHingeErrors) {
+  json t = truthDoc({truthDoor(vec(0, 0, 0), vec(0, 0, 1), 30, "semi_open"),
+                     truthDoor(vec(4, 0, 0), vec(4, 0, 1), 90, "open"),
+                     truthDoor(vec(8, 0, 0), vec(8, 0, 1), 0, "closed")});
+  json r = reportDoc({reportDoor(0, vec(0, 0, 0), vec(0.3, 0.4, 1), 40, "semi_open"),    // 10 deg, 0.5 m
+                      reportDoor(1, vec(4, 0, 0), vec(4, 0, 1.1), 85, "open"),           // 5 deg, 0.1 m
+                      reportDoor(2, vec(8, 0, 0), vec(8, 0.2, 1.2), 0, "closed")});      // 0 deg, sqrt(0.08)
+  EvalResult res = evaluate(t, r);
+  ASSERT_EQ(res.matched, 3);
+  EXPECT_NEAR(res.matches[0].angle_error_deg, 10.0, 1e-9);
+  EXPECT_NEAR(res.matches[1].angle_error_deg, 5.0, 1e-9);
+  EXPECT_NEAR(res.matches[0].hinge_error_m, 0.5, 1e-12);
+  EXPECT_NEAR(res.matches[1].hinge_error_m, 0.1, 1e-12);
+  EXPECT_NEAR(res.matches[2].hinge_error_m, std::sqrt(0.08), 1e-12);
+  EXPECT_NEAR(res.angleMaeDeg(), 5.0, 1e-9);
+  EXPECT_NEAR(res.hingeErrorMeanM(), (0.5 + 0.1 + std::sqrt(0.08)) / 3.0, 1e-12);
+  EXPECT_NEAR(res.hingeErrorMedianM(), std::sqrt(0.08), 1e-12);
+  // Even count: median is the mean of the two middle values.
+  EvalResult two = evaluate(truthDoc({t["doors"][0], t["doors"][1]}), reportDoc({r["doors"][0], r["doors"][1]}));
+  EXPECT_NEAR(two.hingeErrorMedianM(), 0.3, 1e-12);
+}
+
+TEST(Evaluation, EmptyReport) {
+  EvalResult res = evaluate(truthDoc({truthDoor(vec(0, 0, 0), vec(0, 0, 0), 0, "closed")}),
+                            reportDoc(json::array()));
+  EXPECT_EQ(res.reported_doors, 0);
+  EXPECT_DOUBLE_EQ(res.precision(), 1.0);
+  EXPECT_DOUBLE_EQ(res.recall(), 0.0);
+  EXPECT_TRUE(std::isnan(res.stateAccuracy()));
+  EXPECT_TRUE(std::isnan(res.angleMaeDeg()));
+  EXPECT_TRUE(std::isnan(res.hingeErrorMeanM()));
+  EXPECT_TRUE(std::isnan(res.hingeErrorMedianM()));
+  EXPECT_EQ(res.missed_truth, std::vector<int>{0});
+}
+
+TEST(Evaluation, EmptyTruth) {
+  EvalResult res = evaluate(truthDoc(json::array()), reportDoc({reportDoor(0, vec(0, 0, 0), vec(0, 0, 0), 0, "open")}));
+  EXPECT_DOUBLE_EQ(res.precision(), 0.0);
+  EXPECT_DOUBLE_EQ(res.recall(), 1.0);
+  EXPECT_EQ(res.unmatched_report, std::vector<int>{0});
+  EvalResult none = evaluate(truthDoc(json::array()), reportDoc(json::array()));
+  EXPECT_DOUBLE_EQ(none.precision(), 1.0);
+  EXPECT_DOUBLE_EQ(none.recall(), 1.0);
+  EXPECT_TRUE(std::isnan(none.stateAccuracy()));
+}
+
+TEST(Evaluation, ToJsonNaNBecomesNull) {
+  json j = dsr::eval::toJson(evaluate(truthDoc(json::array()), reportDoc(json::array())));
+  EXPECT_EQ(j["true_doors"], 0);
+  EXPECT_EQ(j["precision"], 1.0);
+  EXPECT_EQ(j["recall"], 1.0);
+  for (const char* k : {"state_accuracy", "angle_mae_deg", "hinge_error_mean_m", "hinge_error_median_m"})
+    EXPECT_TRUE(j.at(k).is_null()) << k;
+  EXPECT_TRUE(j["matches"].is_array() && j["matches"].empty());
+  EXPECT_TRUE(j["missed_truth"].is_array());
+  EXPECT_TRUE(j["unmatched_report"].is_array());
+
+  json m = dsr::eval::toJson(single(vec(0.3, 0, 0)));
+  EXPECT_EQ(m["matched"], 1);
+  EXPECT_EQ(m["state_correct"], 1);
+  EXPECT_DOUBLE_EQ(m["state_accuracy"].get<double>(), 1.0);
+  ASSERT_EQ(m["matches"].size(), 1u);
+  EXPECT_EQ(m["matches"][0]["truth_index"], 0);
+  EXPECT_EQ(m["matches"][0]["report_index"], 0);
+  EXPECT_NEAR(m["matches"][0]["center_distance_m"].get<double>(), 0.3, 1e-12);
+  EXPECT_EQ(m["matches"][0]["state_correct"], true);
+}
+
+TEST(Evaluation, MergeAddsCounts) {
+  EvalResult a = single(vec(0, 0, 0));      // 1 true, 1 reported, matched
+  EvalResult b = single(vec(0.51, 0, 0));   // 1 true, 1 reported, not matched
+  json t = truthDoc({truthDoor(vec(0, 0, 0), vec(0, 0, 0), 0, "closed")});
+  EvalResult c = evaluate(t, reportDoc({reportDoor(0, vec(0, 0, 0), vec(0, 0.2, 0), 20, "open")}));
+  EvalResult m = dsr::eval::merge({a, b, c});
+  EXPECT_EQ(m.true_doors, 3);
+  EXPECT_EQ(m.reported_doors, 3);
+  EXPECT_EQ(m.matched, 2);
+  EXPECT_EQ(m.state_correct, 1);
+  EXPECT_EQ(m.matches.size(), 2u);
+  EXPECT_EQ(m.missed_truth.size(), 1u);
+  EXPECT_EQ(m.unmatched_report.size(), 1u);
+  EXPECT_NEAR(m.precision(), 2.0 / 3.0, 1e-12);
+  EXPECT_NEAR(m.stateAccuracy(), 0.5, 1e-12);
+  EXPECT_NEAR(m.angleMaeDeg(), 10.0, 1e-12);
+  EXPECT_NEAR(m.hingeErrorMeanM(), 0.1, 1e-12);
+  EvalResult e = dsr::eval::merge({});
+  EXPECT_EQ(e.true_doors, 0);
+  EXPECT_DOUBLE_EQ(e.precision(), 1.0);
+}
+
+TEST(Evaluation, MalformedInputThrows) {
+  json good_t = truthDoc({truthDoor(vec(0, 0, 0), vec(0, 0, 0), 0, "closed")});
+  json good_r = reportDoc({reportDoor(0, vec(0, 0, 0), vec(0, 0, 0), 0, "closed")});
+  ASSERT_NO_THROW(evaluate(good_t, good_r));
+
+  auto expectThrow = [](const json& t, const json& r, const std::string& needle) {
+    try {
+      evaluate(t, r);
+      ADD_FAILURE() << "no exception, expected one mentioning " << needle;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  json t = good_t;
+  t["doors"] = json::object();
+  expectThrow(t, good_r, "truth.doors");
+  json r = good_r;
+  r["doors"] = "none";
+  expectThrow(good_t, r, "report.doors");
+  r = good_r;
+  r.erase("doors");
+  expectThrow(good_t, r, "report.doors");
+  t = good_t;
+  t["doors"][0].erase("opening_center");
+  expectThrow(t, good_r, "truth.doors[0].opening_center");
+  r = good_r;
+  r["doors"][0]["opening_center"] = json::array({1.0, 2.0});
+  expectThrow(good_t, r, "report.doors[0].opening_center");
+  r = good_r;
+  r["doors"][0]["hinge"] = json::array({1.0, "a", 2.0});
+  expectThrow(good_t, r, "report.doors[0].hinge[1]");
+  r = good_r;
+  r["doors"][0]["state"] = 3;
+  expectThrow(good_t, r, "report.doors[0].state");
+  r = good_r;
+  r["doors"][0]["opening_angle_deg"] = "30";
+  expectThrow(good_t, r, "report.doors[0].opening_angle_deg");
+  r = good_r;
+  r["doors"][0] = 5;
+  expectThrow(good_t, r, "report.doors[0]");
+  t = good_t;
+  t["up"] = vec(0, 0, 0);
+  expectThrow(t, good_r, "truth.up");
+  expectThrow(json::array(), good_r, "truth");
+  expectThrow(good_t, json(nullptr), "report");
+}
