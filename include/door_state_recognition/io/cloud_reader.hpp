@@ -1,0 +1,20 @@
+#pragma once
+#include <stdexcept>
+#include <string>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+namespace dsr { namespace io {
+// Thrown with a one-line, human-readable message saying what is wrong
+// (e.g. "office.pcd: header promises 307200 points but DATA holds 1200").
+class CloudReadError : public std::runtime_error { using std::runtime_error::runtime_error; };
+// Reads x,y,z of a PCD (ascii, binary, binary_compressed) or PLY (ascii,
+// binary_little_endian, binary_big_endian) file. The format is chosen by the
+// file's content (magic "ply" / PCD header keywords), not its extension.
+// Keeps width/height (organized clouds stay organized) and keeps NaN/Inf
+// points as they are (callers filter). Extra fields (rgb, label, normals...)
+// are skipped. x,y,z may be float32 or float64 (converted to float); any
+// other type for x/y/z is an error. Throws CloudReadError on anything wrong.
+pcl::PointCloud<pcl::PointXYZ> readCloud(const std::string& path);
+// Upper bound on points accepted (default 50,000,000); a header asking more is refused.
+void setMaxPoints(std::size_t n);
+}}
