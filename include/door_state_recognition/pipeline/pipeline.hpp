@@ -1,0 +1,90 @@
+// The door-state pipeline: one object, configured by one Parameters struct,
+// running the stages in order:
+//   preprocess   (sanitise, level to a gravity-aligned frame, voxel grid)
+//   segmentation (floor/ceiling histogram, PCA normals, RANSAC walls, region growing)
+//   recognition  (AABB/OBB corners, doorway evidence on each wall, door classification)
+//   state        (leaf fit at the hinge, opening angle, state)
+//   reconstruction (walls with their doorways and leaves as they stand)
+// Results are reported in the input's frame. ROS-free.
+#pragma once
+
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <Eigen/Core>
+#include <array>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "door_state_recognition/pipeline/parameters.hpp"
+
+namespace dsr {
+
+enum class DoorStateKind { Closed = 0, SemiOpen = 1, Open = 2 };
+const char* toString(DoorStateKind s);
+enum class Swing { TowardViewer, AwayFromViewer, Unknown };
+const char* toString(Swing s);
+
+struct WallResult {
+  int id = 0;
+  std::array<Eigen::Vector3d, 8> corners;  // box of the wall's points
+  double height = 0, length = 0;
+  Eigen::Vector3d line_point, line_direction;  // on the floor, unit
+  Eigen::Vector3d normal;                       // horizontal, towards the sensor
+  std::size_t points = 0;
+};
+
+struct DoorResult {
+  int id = 0;
+  std::optional<int> wall_id;
+  DoorStateKind state = DoorStateKind::Closed;
+  double opening_angle_deg = 0;
+  double confidence = 0;
+  Eigen::Vector3d hinge, opening_center;
+  Eigen::Vector3d wall_normal;  // horizontal unit, towards the side the leaf swings to
+  double width = 0, height = 0;
+  std::array<Eigen::Vector3d, 4> leaf_corners;  // hinge-bottom, latch-bottom, latch-top, hinge-top
+  Swing swing = Swing::Unknown;
+  // Fitted lines on the floor plane (the paper's 3.3.2), for display.
+  Eigen::Vector3d wall_line_point, wall_line_direction, leaf_line_point, leaf_line_direction;
+};
+
+struct SegmentResult {  // a region of region growing that is neither wall nor door
+  int id = 0;
+  std::array<Eigen::Vector3d, 8> corners;
+  double height = 0, volume = 0;
+  bool oriented_box = false;  // OBB (true) or AABB
+};
+
+struct PipelineResult {
+  std::size_t points_in = 0, points_used = 0;
+  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();  // in the input frame
+  std::optional<double> floor, ceiling;            // heights along up (p . up)
+  std::vector<WallResult> walls;
+  std::vector<DoorResult> doors;
+  std::vector<SegmentResult> others;
+  std::vector<std::pair<std::string, double>> timing_ms;  // stage -> ms, in order; "total" last
+  std::vector<std::string> warnings;                       // e.g. "no ceiling in view"
+  std::vector<std::string> trace;  // every wall and doorway candidate with the decision taken on it
+  // Reconstruction: walls with doorways and leaves, input frame; label 1 wall, 2 leaf.
+  pcl::PointCloud<pcl::PointXYZL> reconstruction;
+};
+
+class Pipeline {
+ public:
+  // Throws std::invalid_argument when a parameter is out of range.
+  explicit Pipeline(const Parameters& parameters);
+  const Parameters& parameters() const { return params_; }
+
+  // Runs every stage. Non-finite points are dropped. Never throws for the
+  // content of the cloud (an empty or degenerate cloud gives zero doors and a
+  // warning); throws std::invalid_argument for a cloud above max_points.
+  PipelineResult run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool with_reconstruction = true) const;
+
+ private:
+  Parameters params_;
+};
+
+}  // namespace dsr

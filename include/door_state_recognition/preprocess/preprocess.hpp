@@ -1,0 +1,38 @@
+// Preprocessing stage: drop garbage points, level the cloud so that z is up,
+// voxel-downsample. ROS-free.
+#pragma once
+
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace dsr {
+namespace preprocess {
+
+using Points = std::vector<Eigen::Vector3f>;
+
+// "+z" -> (0,0,1) etc.; "auto" -> nullopt. Throws std::invalid_argument otherwise.
+std::optional<Eigen::Vector3d> parseUpAxis(const std::string& axis);
+
+// A proper rotation R with R * up = +z (up need not be unit).
+Eigen::Matrix3d levellingRotation(const Eigen::Vector3d& up);
+
+// Finite points with every |coordinate| <= max_abs, as float vectors.
+Points sanitize(const pcl::PointCloud<pcl::PointXYZ>& cloud, double max_abs);
+
+// One point (the centroid) per occupied cubic voxel of edge `leaf`; the
+// output order is deterministic. leaf <= 0 returns the input.
+Points voxelDownsample(const Points& points, double leaf);
+
+// Estimates the up direction of an unlevelled cloud seen from the origin:
+// the direction most normals are parallel (floor, ceiling) or perpendicular
+// (walls) to, signed so that furniture rests on the floor side. `normals`
+// pairs with `points`. Returns nullopt when the cloud shows no structure.
+std::optional<Eigen::Vector3d> estimateUp(const Points& points, const Points& normals, unsigned seed);
+
+}  // namespace preprocess
+}  // namespace dsr

@@ -1,0 +1,59 @@
+// Recognition stage (paper 3.2 and 3.3.1): bounding-box corners of segments,
+// boundary points by the normal-angle-gap criterion, and doorway candidates
+// on each wall from what the sensor saw on, through and in front of the
+// wall's plane. Levelled frame (z up). ROS-free.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <vector>
+
+#include "door_state_recognition/pipeline/parameters.hpp"
+#include "door_state_recognition/segmentation/segmentation.hpp"
+
+namespace dsr {
+namespace recognition {
+
+using segmentation::Points;
+
+struct BoxCorners {
+  std::array<Eigen::Vector3d, 8> corners;  // bottom four, then top four
+  Eigen::Vector3d center, extents;         // extents along the box axes (full lengths)
+  double volume = 0, height = 0;
+  bool oriented = false;  // OBB (PCA axes, Gram-Schmidt) or AABB
+};
+
+// Paper 3.2.1: AABB when the segment's principal horizontal axis is parallel
+// to a coordinate axis (within 2 deg), otherwise an OBB whose axes are the
+// PCA axes made orthonormal by Gram-Schmidt. Heights are along z.
+BoxCorners boundingBox(const Points& points, const std::vector<int>& indices);
+
+// Paper 3.3.1: a point is on the boundary when the largest angular gap
+// between the projections of its k neighbours onto its tangent plane exceeds
+// angle_deg. Returns one flag per entry of `indices`.
+std::vector<char> boundaryPoints(const Points& points, const segmentation::Normals& normals,
+                                 const segmentation::Tree& tree, const std::vector<int>& indices, int k,
+                                 double angle_deg);
+
+struct Doorway {
+  double s0 = 0, s1 = 0;   // jambs along the wall (WallPlane::along)
+  double top = 0;          // z of the head of the opening (estimate)
+  bool casing = false;     // trim legs found on both sides
+  double face = 0, through = 0, front = 0, recess = 0;  // shares of body cells, see findDoorways
+  double thickness = 0;    // wall thickness seen at the jambs (0: unknown)
+  double width() const { return s1 - s0; }
+};
+
+// Evidence grid over the wall plane (cells of grid_cell along the wall,
+// 5 cm high). Every point is taken along its ray from the viewpoint to the
+// plane: on the face (|d| <= face_tolerance), seen through it (behind by more
+// than 0.3 m), recessed (behind by less), or occluding it (in front). Columns
+// whose body (0.25-1.75 m above the floor) shows no face but through, recess
+// or occlusion form openings; pairs of trim legs (face points standing out by
+// casing_min_offset) form doorways even when a closed leaf is flush with the
+// wall. Candidates are door_min_width..door_max_width wide.
+std::vector<Doorway> findDoorways(const Points& points, const segmentation::WallPlane& wall, double floor_z,
+                                  double top_z, const Eigen::Vector3f& viewpoint, const Parameters& p);
+
+}  // namespace recognition
+}  // namespace dsr

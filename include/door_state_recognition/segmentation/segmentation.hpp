@@ -1,0 +1,67 @@
+// Segmentation stage (paper 3.1): PCA normals and curvature, floor and
+// ceiling from a height histogram, walls as RANSAC vertical planes of wall
+// height, and region growing on normals and curvature. Works in a levelled
+// frame (z up). ROS-free.
+#pragma once
+
+#include <pcl/kdtree/kdtree_flann.h>
+#include <pcl/point_types.h>
+
+#include <Eigen/Core>
+#include <optional>
+#include <vector>
+
+#include "door_state_recognition/pipeline/parameters.hpp"
+
+namespace dsr {
+namespace segmentation {
+
+using Points = std::vector<Eigen::Vector3f>;
+using Tree = pcl::KdTreeFLANN<pcl::PointXYZ>;
+
+struct Normals {
+  Points n;                      // unit, oriented towards the viewpoint
+  std::vector<float> curvature;  // lambda0 / (lambda0 + lambda1 + lambda2)
+};
+
+// PCA over the k nearest neighbours of every point.
+Normals estimateNormals(const Points& points, const Tree& tree, int k, const Eigen::Vector3f& viewpoint);
+
+struct FloorCeiling {
+  std::optional<double> floor, ceiling;  // z
+};
+
+// Peaks of the z histogram of horizontal-surface points: the lowest is the
+// floor, the highest the ceiling (when they are at least min_room_height
+// apart). A single peak is the floor when it lies below the viewpoint.
+FloorCeiling findFloorCeiling(const Points& points, const Normals& normals, const Parameters& p, double viewpoint_z);
+
+struct WallPlane {
+  Eigen::Vector2d point;      // on the wall's line (x, y)
+  Eigen::Vector2d direction;  // unit, along the wall
+  Eigen::Vector2d normal;     // unit, horizontal, towards the viewpoint
+  double s_min = 0, s_max = 0, z_min = 0, z_max = 0;
+  std::vector<int> inliers;
+  double signedDistance(const Eigen::Vector3f& p) const {
+    return (Eigen::Vector2d(p.x(), p.y()) - point).dot(normal);
+  }
+  double along(const Eigen::Vector3f& p) const { return (Eigen::Vector2d(p.x(), p.y()) - point).dot(direction); }
+};
+
+// Iterative 1-point RANSAC of vertical planes (a point and its normal
+// propose a plane), refined by total least squares, split at gaps, kept when
+// the segment spans wall_height_ratio of the room height and reaches near the
+// ceiling (when seen). `height_top` is the ceiling or, without one, the top
+// of the vertical structure.
+std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, double floor_z, double height_top,
+                                 bool ceiling_known, const Eigen::Vector2d& viewpoint, const Parameters& p);
+
+// Region growing (paper 3.1, [22]) over the points where mask != 0: a region
+// grows to neighbours whose normals differ by less than region_angle_deg and
+// continues from points whose curvature is below region_curvature. Regions
+// smaller than min_region_points are dropped. Deterministic.
+std::vector<std::vector<int>> growRegions(const Points& points, const Normals& normals, const Tree& tree,
+                                         const std::vector<char>& mask, const Parameters& p);
+
+}  // namespace segmentation
+}  // namespace dsr

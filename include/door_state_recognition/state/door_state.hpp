@@ -1,0 +1,47 @@
+// Door-state stage (paper 3.3.2-3.3.3, improved): the leaf is fitted as a
+// rectangle turning about a hinge at one jamb of the doorway, towards either
+// side of the wall; the opening angle is measured at the hinge from the
+// closed position, in [0, 180] deg, and refined by a total-least-squares
+// line through the leaf's points (any direction, unlike y = a x + b).
+// Levelled frame. ROS-free.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "door_state_recognition/pipeline/parameters.hpp"
+#include "door_state_recognition/pipeline/pipeline.hpp"
+#include "door_state_recognition/recognition/recognition.hpp"
+
+namespace dsr {
+namespace state {
+
+struct Line2 {
+  Eigen::Vector2d point = Eigen::Vector2d::Zero();
+  Eigen::Vector2d direction = Eigen::Vector2d::UnitX();  // unit
+};
+
+// Total least squares: the line minimising perpendicular distances.
+Line2 fitLine(const std::vector<Eigen::Vector2d>& points);
+
+struct LeafFit {
+  bool found = false;
+  bool closed_in_band = false;  // a leaf fills the doorway inside the wall
+  double angle_deg = 0;         // 0 closed .. 180
+  bool hinge_at_s0 = true;      // hinge at the doorway's s0 jamb
+  bool toward_viewer = true;    // swings to the viewer's side of the wall
+  double coverage = 0;          // share of the leaf's cells holding points
+  Eigen::Vector2d hinge = Eigen::Vector2d::Zero();      // x, y
+  Eigen::Vector2d direction = Eigen::Vector2d::UnitX(); // hinge -> latch, unit
+  double length = 0, top_z = 0;
+  double face_d = 0;            // closed leaf: depth of its visible face (<= 0, behind the wall face)
+  std::vector<int> inliers;
+};
+
+LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlane& wall,
+                const recognition::Doorway& doorway, double floor_z, double thickness, const Parameters& p);
+
+DoorStateKind classify(double angle_deg, const Parameters& p);
+
+}  // namespace state
+}  // namespace dsr

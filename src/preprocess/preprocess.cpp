@@ -1,0 +1,137 @@
+#include "door_state_recognition/preprocess/preprocess.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <stdexcept>
+#include <unordered_map>
+
+namespace dsr {
+namespace preprocess {
+
+std::optional<Eigen::Vector3d> parseUpAxis(const std::string& a) {
+  if (a == "auto") return std::nullopt;
+  if (a.size() == 2 && (a[0] == '+' || a[0] == '-') && a[1] >= 'x' && a[1] <= 'z') {
+    Eigen::Vector3d v = Eigen::Vector3d::Zero();
+    v[a[1] - 'x'] = a[0] == '+' ? 1.0 : -1.0;
+    return v;
+  }
+  throw std::invalid_argument("up axis must be one of +x -x +y -y +z -z auto, got '" + a + "'");
+}
+
+Eigen::Matrix3d levellingRotation(const Eigen::Vector3d& up) {
+  return Eigen::Quaterniond::FromTwoVectors(up.normalized(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+}
+
+Points sanitize(const pcl::PointCloud<pcl::PointXYZ>& cloud, double max_abs) {
+  Points out;
+  out.reserve(cloud.size());
+  const float lim = static_cast<float>(max_abs);
+  for (const auto& p : cloud.points)
+    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && std::abs(p.x) <= lim &&
+        std::abs(p.y) <= lim && std::abs(p.z) <= lim)
+      out.emplace_back(p.x, p.y, p.z);
+  return out;
+}
+
+Points voxelDownsample(const Points& points, double leaf) {
+  if (leaf <= 0 || points.empty()) return points;
+  struct Acc {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    int n = 0;
+    std::size_t first = 0;
+  };
+  auto key = [leaf](const Eigen::Vector3f& p) {
+    const auto c = [leaf](float v) { return static_cast<std::int64_t>(std::floor(v / leaf)); };
+    const std::uint64_t x = static_cast<std::uint64_t>(c(p.x())), y = static_cast<std::uint64_t>(c(p.y())),
+                        z = static_cast<std::uint64_t>(c(p.z()));
+    // 21 bits an axis: coordinates are bounded by max_abs_coordinate / leaf
+    // (checked by the caller), wrap-around only merges far-apart voxels.
+    return (x & 0x1FFFFF) | ((y & 0x1FFFFF) << 21) | ((z & 0x1FFFFF) << 42);
+  };
+  std::unordered_map<std::uint64_t, Acc> cells;
+  cells.reserve(points.size() / 2);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    Acc& a = cells[key(points[i])];
+    if (a.n == 0) a.first = i;
+    a.sum += points[i].cast<double>();
+    ++a.n;
+  }
+  std::vector<const Acc*> order;
+  order.reserve(cells.size());
+  for (const auto& kv : cells) order.push_back(&kv.second);
+  std::sort(order.begin(), order.end(), [](const Acc* a, const Acc* b) { return a->first < b->first; });
+  Points out;
+  out.reserve(order.size());
+  for (const Acc* a : order) out.push_back((a->sum / a->n).cast<float>());
+  return out;
+}
+
+std::optional<Eigen::Vector3d> estimateUp(const Points& points, const Points& normals, unsigned seed) {
+  if (points.size() < 50) return std::nullopt;
+  // Candidate axes: a sample of normals, and cross products of pairs of them
+  // (two walls give up even with no floor in view).
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<std::size_t> pick(0, points.size() - 1);
+  std::vector<Eigen::Vector3f> cand;
+  for (int i = 0; i < 200; ++i) cand.push_back(normals[pick(rng)]);
+  for (int i = 0; i < 200; ++i) {
+    const Eigen::Vector3f c = normals[pick(rng)].cross(normals[pick(rng)]);
+    if (c.norm() > 0.5f) cand.push_back(c.normalized());
+  }
+  const std::size_t stride = std::max<std::size_t>(1, normals.size() / 20000);
+  auto score = [&](const Eigen::Vector3f& c) {
+    std::size_t s = 0;
+    for (std::size_t i = 0; i < normals.size(); i += stride) {
+      const float d = std::abs(normals[i].dot(c));
+      s += (d > 0.97f) + (d < 0.05f);
+    }
+    return s;
+  };
+  Eigen::Vector3f best = Eigen::Vector3f::UnitZ();
+  std::size_t best_score = 0;
+  for (const auto& c : cand) {
+    const std::size_t s = score(c);
+    if (s > best_score) {
+      best_score = s;
+      best = c;
+    }
+  }
+  if (best_score < normals.size() / stride / 4) return std::nullopt;
+  // Refine: average the normals of horizontal points (sign-aligned) if any.
+  Eigen::Vector3d acc = Eigen::Vector3d::Zero();
+  for (const auto& n : normals)
+    if (std::abs(n.dot(best)) > 0.97f) acc += (n.dot(best) > 0 ? n : Eigen::Vector3f(-n)).cast<double>();
+  Eigen::Vector3d up = acc.norm() > 10 ? acc.normalized() : best.cast<double>().normalized();
+
+  // Sign: furniture and clutter rest on the floor. Compare the mass of
+  // non-planar points in the lower and upper thirds of the height range.
+  std::vector<double> h;
+  h.reserve(points.size());
+  for (const auto& p : points) h.push_back(p.cast<double>().dot(up));
+  std::vector<double> sorted = h;
+  std::sort(sorted.begin(), sorted.end());
+  const double lo = sorted[sorted.size() / 50], hi = sorted[sorted.size() - 1 - sorted.size() / 50];
+  const double third = (hi - lo) / 3;
+  std::size_t below = 0, above = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const double d = std::abs(normals[i].cast<double>().dot(up));
+    if (d > 0.9 || d < 0.1) continue;  // planes: floor, ceiling, walls
+    below += h[i] < lo + third;
+    above += h[i] > hi - third;
+  }
+  // Near-planar clutter is rare in empty scans: fall back on the horizontal
+  // surfaces below vs above the sensor (the sensor sits nearer the floor
+  // than most ceilings are tall, and cameras rarely see the ceiling).
+  if (below + above < 200) {
+    below = above = 0;
+    for (std::size_t i = 0; i < points.size(); ++i)
+      if (std::abs(normals[i].cast<double>().dot(up)) > 0.97) (h[i] < 0 ? below : above)++;
+  }
+  if (above > below) up = -up;
+  return up;
+}
+
+}  // namespace preprocess
+}  // namespace dsr

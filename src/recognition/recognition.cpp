@@ -1,0 +1,306 @@
+#include "door_state_recognition/recognition/recognition.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+namespace dsr {
+namespace recognition {
+
+BoxCorners boundingBox(const Points& points, const std::vector<int>& idx) {
+  BoxCorners b;
+  if (idx.empty()) return b;
+  // Principal horizontal axis of the segment.
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (int i : idx) mean += points[i].head<2>().cast<double>();
+  mean /= static_cast<double>(idx.size());
+  Eigen::Matrix2d C = Eigen::Matrix2d::Zero();
+  for (int i : idx) {
+    const Eigen::Vector2d d = points[i].head<2>().cast<double>() - mean;
+    C += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(C);
+  Eigen::Vector2d a = es.eigenvectors().col(1);
+  const double ang = std::atan2(a.y(), a.x());
+  const double to_axis = std::abs(std::remainder(ang, M_PI / 2));
+  b.oriented = to_axis > 2.0 * M_PI / 180.0;
+  // Gram-Schmidt: the axes are the principal horizontal axis, its
+  // orthogonal complement in the horizontal plane, and z (levelled frame).
+  Eigen::Vector3d e1 = b.oriented ? Eigen::Vector3d(a.x(), a.y(), 0).normalized() : Eigen::Vector3d::UnitX();
+  Eigen::Vector3d e3 = Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d e2 = e3.cross(e1);
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = Eigen::Vector3d::Constant(-1e300);
+  for (int i : idx) {
+    const Eigen::Vector3d p = points[i].cast<double>();
+    const Eigen::Vector3d q(p.dot(e1), p.dot(e2), p.dot(e3));
+    lo = lo.cwiseMin(q);
+    hi = hi.cwiseMax(q);
+  }
+  b.extents = hi - lo;
+  b.volume = b.extents.prod();
+  b.height = b.extents.z();
+  const Eigen::Vector3d c = (lo + hi) / 2;
+  b.center = c.x() * e1 + c.y() * e2 + c.z() * e3;
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d q((k & 1) ? hi.x() : lo.x(), (k & 2) ? hi.y() : lo.y(), (k & 4) ? hi.z() : lo.z());
+    b.corners[k] = q.x() * e1 + q.y() * e2 + q.z() * e3;
+  }
+  return b;
+}
+
+std::vector<char> boundaryPoints(const Points& points, const segmentation::Normals& normals,
+                                 const segmentation::Tree& tree, const std::vector<int>& indices, int k,
+                                 double angle_deg) {
+  std::vector<char> out(indices.size(), 0);
+  const double thr = angle_deg * M_PI / 180.0;
+  const int kk = std::min<int>(k, static_cast<int>(points.size()));
+  if (kk < 3) return out;
+  std::vector<int> nb(kk);
+  std::vector<float> dist(kk);
+  std::vector<double> angles;
+  for (std::size_t j = 0; j < indices.size(); ++j) {
+    const int i = indices[j];
+    const Eigen::Vector3d p = points[i].cast<double>(), n = normals.n[i].cast<double>();
+    // Tangent basis (u, v) of the plane perpendicular to n.
+    Eigen::Vector3d u = n.unitOrthogonal(), v = n.cross(u);
+    const int found = tree.nearestKSearch(pcl::PointXYZ(points[i].x(), points[i].y(), points[i].z()), kk, nb, dist);
+    angles.clear();
+    for (int m = 0; m < found; ++m) {
+      if (nb[m] == i) continue;
+      const Eigen::Vector3d d = points[nb[m]].cast<double>() - p;
+      const Eigen::Vector3d proj = d - d.dot(n) * n;  // onto the tangent plane
+      if (proj.squaredNorm() < 1e-12) continue;
+      angles.push_back(std::atan2(proj.dot(v), proj.dot(u)));
+    }
+    if (angles.size() < 2) {
+      out[j] = 1;
+      continue;
+    }
+    std::sort(angles.begin(), angles.end());
+    double gap = 2 * M_PI - (angles.back() - angles.front());
+    for (std::size_t m = 1; m < angles.size(); ++m) gap = std::max(gap, angles[m] - angles[m - 1]);
+    out[j] = gap > thr;
+  }
+  return out;
+}
+
+namespace {
+
+// Evidence counts of one cell of a wall's grid.
+struct Cell {
+  int face = 0, through = 0, front = 0, recess = 0;
+};
+
+// d values near 0 towards -t at a jamb: the run of depths from the face
+// inwards without a gap of more than 3 cm is the wall's thickness.
+double thicknessFrom(std::vector<double> depth, double start) {
+  if (depth.size() < 5) return 0;
+  std::sort(depth.begin(), depth.end());
+  double last = start;
+  for (double d : depth) {
+    if (d - last > 0.03) break;
+    last = d;
+  }
+  return last;
+}
+
+}  // namespace
+
+std::vector<Doorway> findDoorways(const Points& points, const segmentation::WallPlane& wall, double floor_z,
+                                  double top_z, const Eigen::Vector3f& viewpoint, const Parameters& p) {
+  const double cell = p.grid_cell, row_h = 0.05;
+  const double s_lo = wall.s_min - 0.3, s_hi = wall.s_max + 0.3;
+  const int cols = std::max(1, static_cast<int>(std::ceil((s_hi - s_lo) / cell)));
+  const double z_span = std::min(top_z - floor_z, 2.6);
+  const int rows = std::max(1, static_cast<int>(std::ceil(z_span / row_h)));
+  if (cols > 20000) return {};
+  std::vector<Cell> grid(static_cast<std::size_t>(cols) * rows);
+  std::vector<int> face_d_out(cols, 0), face_d_n(cols, 0);
+  const double d_view = wall.signedDistance(viewpoint);
+  if (d_view <= 0) return {};
+  auto cellAt = [&](double s, double z) -> Cell* {
+    const int c = static_cast<int>(std::floor((s - s_lo) / cell)), r = static_cast<int>(std::floor((z - floor_z) / row_h));
+    if (c < 0 || c >= cols || r < 0 || r >= rows) return nullptr;
+    return &grid[static_cast<std::size_t>(r) * cols + c];
+  };
+  const double footprint = std::max(p.voxel_size, 0.01);
+  for (const auto& pt : points) {
+    const double d = wall.signedDistance(pt);
+    if (d >= d_view) continue;  // beside or behind the sensor
+    if (std::abs(d) <= p.face_tolerance) {
+      const double s = wall.along(pt);
+      if (Cell* c = cellAt(s, pt.z())) {
+        ++c->face;
+        if (pt.z() > floor_z + 0.3 && pt.z() < floor_z + 1.9) {
+          const int col = static_cast<int>((s - s_lo) / cell);
+          face_d_out[col] += d > p.casing_min_offset;
+          ++face_d_n[col];
+        }
+      }
+      continue;
+    }
+    // Where the ray from the sensor to this point crosses the wall's plane.
+    const double lambda = d_view / (d_view - d);
+    const Eigen::Vector3f x = viewpoint + static_cast<float>(lambda) * (pt - viewpoint);
+    const double s = wall.along(x);
+    if (d < 0) {
+      if (Cell* c = cellAt(s, x.z())) (d < -0.3 ? c->through : c->recess)++;
+    } else {
+      // An occluder shadows a patch that grows with lambda.
+      const int r = std::min(5, static_cast<int>(std::ceil(0.5 * footprint * lambda / cell)));
+      for (int dc = -r; dc <= r; ++dc)
+        for (int dr = -r; dr <= r; ++dr)
+          if (Cell* c = cellAt(s + dc * cell, x.z() + dr * cell)) ++c->front;
+    }
+  }
+
+  // Column shares over the body of a door.
+  const int body0 = static_cast<int>(0.25 / row_h), body1 = std::min(rows, static_cast<int>(1.75 / row_h));
+  const int nbody = std::max(1, body1 - body0);
+  std::vector<double> face(cols), expl(cols), casing_share(cols, 0.0);
+  for (int c = 0; c < cols; ++c) {
+    int f = 0, e = 0;
+    for (int r = body0; r < body1; ++r) {
+      const Cell& g = grid[static_cast<std::size_t>(r) * cols + c];
+      if (g.face) ++f;
+      else if (g.through || g.front || g.recess) ++e;
+    }
+    face[c] = static_cast<double>(f) / nbody;
+    expl[c] = static_cast<double>(e) / nbody;
+    // Trim: most face points of the column stand out of the wall (a corner
+    // with another wall mixes points at all offsets and stays below).
+    casing_share[c] = face_d_n[c] >= 5 ? static_cast<double>(face_d_out[c]) / face_d_n[c] : 0.0;
+  }
+  auto colS = [&](int c) { return s_lo + c * cell; };
+  if (std::getenv("DSR_DEBUG_COLUMNS"))
+    for (int c = 0; c < cols; ++c)
+      std::fprintf(stderr, "col wall=(%.2f,%.2f) s=%.2f face=%.2f expl=%.2f casing=%.2f\n", wall.point.x(), wall.point.y(), colS(c), face[c], expl[c], casing_share[c]);
+
+  std::vector<Doorway> out;
+  auto addCandidate = [&](double s0, double s1, bool casing) {
+    if (s1 - s0 < p.door_min_width - 0.1 || s1 - s0 > p.door_max_width + 0.1) return;
+    for (Doorway& d : out)  // merge with an overlapping candidate, casing edges win
+      if (s0 < d.s1 && d.s0 < s1) {
+        if (casing && !d.casing) d.s0 = s0, d.s1 = s1, d.casing = true;
+        return;
+      }
+    Doorway d;
+    d.s0 = s0;
+    d.s1 = s1;
+    d.casing = casing;
+    out.push_back(d);
+  };
+
+  // (1) Trim legs: columns of face points standing out of the wall.
+  std::vector<std::pair<int, int>> legs;
+  for (int c = 0; c < cols;) {
+    auto isCasing = [&](int k) { return casing_share[k] >= 0.7 && face[k] >= 0.5; };
+    if (!isCasing(c)) {
+      ++c;
+      continue;
+    }
+    int e = c;
+    while (e + 1 < cols && isCasing(e + 1)) ++e;
+    const double w = (e - c + 1) * cell;
+    if (w >= 0.03 && w <= 0.2) legs.push_back({c, e});
+    c = e + 1;
+  }
+  // Refine a leg's inner edge from its points standing out of the face.
+  auto legEdge = [&](int c0, int c1, bool right_edge) {
+    std::vector<double> s;
+    for (const auto& pt : points) {
+      const double d = wall.signedDistance(pt);
+      if (d <= p.casing_min_offset * 1.3 || d > p.face_tolerance || pt.z() < floor_z + 0.3 || pt.z() > floor_z + 1.9) continue;
+      const double a = wall.along(pt);
+      if (a >= colS(c0) - cell && a <= colS(c1 + 1) + cell) s.push_back(a);
+    }
+    if (s.size() < 5) return right_edge ? colS(c1 + 1) : colS(c0);
+    std::sort(s.begin(), s.end());
+    return right_edge ? s[s.size() * 97 / 100] : s[s.size() * 3 / 100];
+  };
+  for (std::size_t i = 0; i + 1 < legs.size(); ++i) {
+    const double inner = colS(legs[i + 1].first) - colS(legs[i].second + 1);
+    if (inner >= p.door_min_width - 0.1 && inner <= p.door_max_width + 0.1) {
+      addCandidate(legEdge(legs[i].first, legs[i].second, true), legEdge(legs[i + 1].first, legs[i + 1].second, false), true);
+      ++i;
+    }
+  }
+
+  // (2) Openings: body without face but with evidence of what lies beyond.
+  auto open = [&](int c) { return face[c] < 0.3 && expl[c] >= 0.4; };
+  for (int c = 0; c < cols;) {
+    if (!open(c)) {
+      ++c;
+      continue;
+    }
+    int e = c;
+    // Bridge one weak column (noise), never a column of wall face: a hinge
+    // jamb between a doorway and the shadow of its leaf ends the run.
+    while (e + 1 < cols && (open(e + 1) || (e + 2 < cols && face[e + 1] < 0.5 && open(e + 2)))) ++e;
+    // Jambs where the face points end, refined from the points themselves.
+    double s0 = colS(c), s1 = colS(e + 1);
+    std::vector<double> left, right;
+    for (const auto& pt : points) {
+      if (std::abs(wall.signedDistance(pt)) > p.face_tolerance || pt.z() < floor_z + 0.25 || pt.z() > floor_z + 1.75) continue;
+      const double a = wall.along(pt);
+      if (a > s0 - 0.12 && a < s0 + 0.06) left.push_back(a);
+      if (a > s1 - 0.06 && a < s1 + 0.12) right.push_back(a);
+    }
+    if (left.size() >= 5) {
+      std::sort(left.begin(), left.end());
+      s0 = left[left.size() * 97 / 100];
+    }
+    if (right.size() >= 5) {
+      std::sort(right.begin(), right.end());
+      s1 = right[right.size() * 3 / 100];
+    }
+    addCandidate(s0, s1, false);
+    c = e + 1;
+  }
+
+  // Shares, head and thickness of every candidate.
+  for (Doorway& d : out) {
+    const int c0 = std::max(0, static_cast<int>((d.s0 - s_lo) / cell) + 1);
+    const int c1 = std::min(cols - 1, static_cast<int>((d.s1 - s_lo) / cell) - 1);
+    int n = 0, f = 0, t = 0, fr = 0, re = 0;
+    for (int c = c0; c <= c1; ++c)
+      for (int r = body0; r < body1; ++r) {
+        const Cell& g = grid[static_cast<std::size_t>(r) * cols + c];
+        ++n;
+        if (g.face) ++f;
+        else if (g.through) ++t;
+        else if (g.recess) ++re;
+        else if (g.front) ++fr;
+      }
+    if (n > 0) {
+      d.face = static_cast<double>(f) / n;
+      d.through = static_cast<double>(t) / n;
+      d.front = static_cast<double>(fr) / n;
+      d.recess = static_cast<double>(re) / n;
+    }
+    d.top = std::numeric_limits<double>::quiet_NaN();
+    for (int r = body1; r < rows && c1 >= c0; ++r) {
+      int rf = 0;
+      for (int c = c0; c <= c1; ++c) rf += grid[static_cast<std::size_t>(r) * cols + c].face > 0;
+      if (rf >= 0.5 * (c1 - c0 + 1) && (d.face < 0.5 || r * row_h > 1.9)) {
+        d.top = floor_z + r * row_h;
+        break;
+      }
+    }
+    std::vector<double> depth_l, depth_r;
+    for (const auto& pt : points) {
+      const double dd = -wall.signedDistance(pt);
+      if (dd < p.face_tolerance || dd > 0.6 || pt.z() < floor_z + 0.25 || pt.z() > floor_z + 1.75) continue;
+      const double a = wall.along(pt);
+      if (std::abs(a - d.s0) < 0.03) depth_l.push_back(dd);
+      if (std::abs(a - d.s1) < 0.03) depth_r.push_back(dd);
+    }
+    d.thickness = std::max(thicknessFrom(depth_l, p.face_tolerance), thicknessFrom(depth_r, p.face_tolerance));
+  }
+  return out;
+}
+
+}  // namespace recognition
+}  // namespace dsr

@@ -1,0 +1,172 @@
+#include "door_state_recognition/state/door_state.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+namespace dsr {
+namespace state {
+
+Line2 fitLine(const std::vector<Eigen::Vector2d>& pts) {
+  Line2 l;
+  if (pts.empty()) return l;
+  for (const auto& q : pts) l.point += q;
+  l.point /= static_cast<double>(pts.size());
+  Eigen::Matrix2d C = Eigen::Matrix2d::Zero();
+  for (const auto& q : pts) C += (q - l.point) * (q - l.point).transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(C);
+  l.direction = es.eigenvectors().col(1).normalized();
+  return l;
+}
+
+DoorStateKind classify(double angle_deg, const Parameters& p) {
+  if (angle_deg < p.closed_below_deg) return DoorStateKind::Closed;
+  if (angle_deg < p.open_from_deg) return DoorStateKind::SemiOpen;
+  return DoorStateKind::Open;
+}
+
+namespace {
+
+struct Local {  // a point in wall coordinates: s along, d towards the viewer
+  double s, d;
+  int zbin, index;
+};
+
+}  // namespace
+
+LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlane& wall,
+                const recognition::Doorway& door, double floor_z, double t, const Parameters& p) {
+  LeafFit fit;
+  const double w = door.width(), L = std::max(0.1, w - 0.008), lt = p.leaf_thickness, tol = p.leaf_tolerance;
+  const double z0 = floor_z + 0.25;
+  const double z1 = floor_z + std::min(1.75, (std::isfinite(door.top) ? door.top - floor_z : 2.0) - 0.1);
+  const double zbin = 0.1, abin = 0.05;
+  const int nz = std::max(1, static_cast<int>((z1 - z0) / zbin));
+  const double sc = (door.s0 + door.s1) / 2, reach = w + 0.25;
+
+  std::vector<Local> pts, band;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const auto& q = points[i];
+    if (q.z() < z0 || q.z() >= z1) continue;
+    const double s = wall.along(q), d = wall.signedDistance(q);
+    if (std::hypot(s - sc, d + t / 2) > reach) continue;
+    const int zb = std::min(nz - 1, static_cast<int>((q.z() - z0) / zbin));
+    const bool inside = s > door.s0 + 0.03 && s < door.s1 - 0.03;
+    const bool in_wall_band = d > -t - 0.03 && d < p.face_tolerance + 0.01;
+    if (in_wall_band && inside) band.push_back({s, d, zb, static_cast<int>(i)});
+    if (in_wall_band && !inside) continue;  // wall, trim and jambs beside the doorway
+    pts.push_back({s, d, zb, static_cast<int>(i)});
+  }
+
+  // Exhaustive search over hinge side, swing side and angle.
+  const int na = std::max(1, static_cast<int>(std::ceil(L / abin)));
+  const double expected = static_cast<double>(na) * nz;
+  double best = -1;
+  int best_h = 0, best_sw = 0, best_deg = 0;
+  std::vector<char> seen(static_cast<std::size_t>(na) * nz);
+  for (int h = 0; h < 2; ++h)
+    for (int sw = 0; sw < 2; ++sw) {
+      const double s_h = h == 0 ? door.s0 : door.s1, e0 = h == 0 ? 1.0 : -1.0;
+      const double m = sw == 0 ? 1.0 : -1.0, d_h = sw == 0 ? 0.0 : -t;
+      for (int deg = 0; deg <= 180; ++deg) {
+        const double th = deg * M_PI / 180, c = std::cos(th), sn = std::sin(th);
+        // e = c*e0*u + sn*m*n ; k = sn*e0*u - c*m*n
+        const Eigen::Vector2d e(c * e0, sn * m), k(sn * e0, -c * m);
+        std::fill(seen.begin(), seen.end(), 0);
+        int cells = 0;
+        for (const Local& q : pts) {
+          const Eigen::Vector2d r(q.s - s_h, q.d - d_h);
+          const double a = r.dot(e), b = r.dot(k);
+          if (a < 0.02 || a > L || b < -tol || b > lt + tol) continue;
+          char& f = seen[static_cast<std::size_t>(std::min(na - 1, static_cast<int>(a / abin))) * nz + q.zbin];
+          if (!f) f = 1, ++cells;
+        }
+        if (cells > best) best = cells, best_h = h, best_sw = sw, best_deg = deg;
+      }
+    }
+
+  // A closed leaf anywhere inside the wall's thickness (flush or recessed).
+  std::set<std::pair<int, int>> band_cells;
+  std::vector<Eigen::Vector2d> band_xy;
+  for (const Local& q : band) {
+    band_cells.insert({static_cast<int>((q.s - door.s0) / abin), q.zbin});
+    band_xy.emplace_back(q.s, q.d);
+  }
+  const double band_cov = std::min(1.0, band_cells.size() / expected);
+  double band_angle = 0;
+  if (band_xy.size() >= 10) {
+    const Line2 l = fitLine(band_xy);
+    band_angle = std::acos(std::min(1.0, std::abs(l.direction.x()))) * 180 / M_PI;
+  }
+
+  const double gen_cov = std::max(0.0, best) / expected;
+  fit.length = L;
+  fit.hinge_at_s0 = best_h == 0;
+  fit.toward_viewer = best_sw == 0;
+  const double s_h = best_h == 0 ? door.s0 : door.s1, e0 = best_h == 0 ? 1.0 : -1.0;
+  const double m = best_sw == 0 ? 1.0 : -1.0, d_h = best_sw == 0 ? 0.0 : -t;
+  auto toXY = [&](double s, double d) { return wall.point + s * wall.direction + d * wall.normal; };
+
+  if (band_cov >= 0.55 && (best_deg < p.closed_below_deg + 3 || gen_cov < band_cov)) {
+    fit.found = true;
+    fit.closed_in_band = true;
+    fit.angle_deg = band_angle;
+    // A closed leaf sits flush with (or set back from) the face of the wall
+    // on its swing side: its visible face near the near face says "towards
+    // the viewer", near the far face (less a leaf thickness) "away".
+    std::vector<double> dv;
+    for (const Local& q : band) dv.push_back(q.d);
+    std::nth_element(dv.begin(), dv.begin() + dv.size() / 2, dv.end());
+    fit.face_d = dv[dv.size() / 2];
+    fit.toward_viewer = -fit.face_d < (t - lt) / 2;
+    fit.coverage = band_cov;
+    for (const Local& q : band) fit.inliers.push_back(q.index);
+  } else if (gen_cov >= p.min_leaf_coverage) {
+    fit.found = true;
+    fit.coverage = gen_cov;
+    // Refine the angle: TLS line through the inliers of the best hypothesis.
+    const double th = best_deg * M_PI / 180;
+    const Eigen::Vector2d e(std::cos(th) * e0, std::sin(th) * m), k(std::sin(th) * e0, -std::cos(th) * m);
+    std::vector<Eigen::Vector2d> xy;
+    for (const Local& q : pts) {
+      const Eigen::Vector2d r(q.s - s_h, q.d - d_h);
+      const double a = r.dot(e), b = r.dot(k);
+      if (a < 0.05 || a > L || b < -tol || b > lt + tol) continue;
+      xy.emplace_back(q.s, q.d);
+      fit.inliers.push_back(q.index);
+    }
+    double angle = best_deg;
+    if (xy.size() >= 10) {
+      Line2 l = fitLine(xy);
+      if (l.direction.dot(e) < 0) l.direction = -l.direction;
+      angle = std::atan2(l.direction.y() * m, l.direction.x() * e0) * 180 / M_PI;
+      if (std::abs(angle - best_deg) > 5) angle = best_deg;  // keep the search's answer if the fit wandered
+    }
+    fit.angle_deg = std::min(180.0, std::max(0.0, angle));
+  }
+  if (!fit.found) return fit;
+  const double th = fit.angle_deg * M_PI / 180;
+  const Eigen::Vector2d dir_sd(std::cos(th) * e0, std::sin(th) * m);
+  const double hinge_d = !fit.closed_in_band ? d_h : fit.toward_viewer ? fit.face_d : fit.face_d - lt;
+  const Eigen::Vector2d hinge_xy = toXY(s_h, hinge_d);
+  fit.hinge = hinge_xy;
+  fit.direction = (dir_sd.x() * wall.direction + dir_sd.y() * wall.normal).normalized();
+  std::vector<float> zs;
+  for (int i : fit.inliers) zs.push_back(points[i].z());
+  // The leaf's top: highest of its points over its whole height.
+  double top = z1;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const auto& q = points[i];
+    if (q.z() < z1) continue;
+    const double s = wall.along(q), d = wall.signedDistance(q);
+    const Eigen::Vector2d r(s - s_h, d - (fit.closed_in_band ? -t / 2 : d_h));
+    const double a = r.dot(dir_sd), b = std::abs(r.x() * dir_sd.y() - r.y() * dir_sd.x());
+    if (a > 0.05 && a < L && b < (fit.closed_in_band ? t / 2 + 0.03 : lt + tol)) top = std::max<double>(top, q.z());
+  }
+  fit.top_z = top;
+  return fit;
+}
+
+}  // namespace state
+}  // namespace dsr
