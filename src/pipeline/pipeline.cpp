@@ -149,7 +149,7 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
     for (int i : wall.inliers) is_wall[i] = 1;
     for (const recognition::Doorway& d : recognition::findDoorways(pts, wall, floor_z, top_z, viewpoint, p)) {
       const double t = d.thickness > 0.04 ? d.thickness : p.default_wall_thickness;
-      const state::LeafFit leaf = state::fitLeaf(pts, wall, d, floor_z, t, p);
+      const state::LeafFit leaf = state::fitLeaf(pts, wall, d, floor_z, t, viewpoint, p);
       if (!leaf.found) {
         char buf[300];
         std::snprintf(buf, sizeof buf, "wall %zu: doorway s=[%.2f, %.2f] casing=%d through=%.2f front=%.2f recess=%.2f | no leaf",

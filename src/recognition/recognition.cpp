@@ -90,7 +90,7 @@ namespace {
 
 // Evidence counts of one cell of a wall's grid.
 struct Cell {
-  int face = 0, through = 0, front = 0, recess = 0;
+  int face = 0, out = 0, through = 0, front = 0, recess = 0;  // out: face points standing out (trim)
 };
 
 // d values near 0 towards -t at a jamb: the run of depths from the face
@@ -117,7 +117,9 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   const int rows = std::max(1, static_cast<int>(std::ceil(z_span / row_h)));
   if (cols > 20000) return {};
   std::vector<Cell> grid(static_cast<std::size_t>(cols) * rows);
-  std::vector<int> face_d_out(cols, 0), face_d_n(cols, 0);
+  // Trim is sought on sub-columns of half a cell, summed over the body.
+  const int sub = 2 * cols;
+  std::vector<int> face_d_out(sub, 0), face_d_n(sub, 0);
   const double d_view = wall.signedDistance(viewpoint);
   if (d_view <= 0) return {};
   auto cellAt = [&](double s, double z) -> Cell* {
@@ -133,8 +135,9 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       const double s = wall.along(pt);
       if (Cell* c = cellAt(s, pt.z())) {
         ++c->face;
+        c->out += d > p.casing_min_offset;
         if (pt.z() > floor_z + 0.3 && pt.z() < floor_z + 1.9) {
-          const int col = static_cast<int>((s - s_lo) / cell);
+          const int col = std::min(sub - 1, static_cast<int>((s - s_lo) / (cell / 2)));
           face_d_out[col] += d > p.casing_min_offset;
           ++face_d_n[col];
         }
@@ -159,7 +162,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   // Column shares over the body of a door.
   const int body0 = static_cast<int>(0.25 / row_h), body1 = std::min(rows, static_cast<int>(1.75 / row_h));
   const int nbody = std::max(1, body1 - body0);
-  std::vector<double> face(cols), expl(cols), casing_share(cols, 0.0);
+  std::vector<double> face(cols), expl(cols), casing_share(sub, 0.0);
   for (int c = 0; c < cols; ++c) {
     int f = 0, e = 0;
     for (int r = body0; r < body1; ++r) {
@@ -169,14 +172,15 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     }
     face[c] = static_cast<double>(f) / nbody;
     expl[c] = static_cast<double>(e) / nbody;
-    // Trim: most face points of the column stand out of the wall (a corner
-    // with another wall mixes points at all offsets and stays below).
-    casing_share[c] = face_d_n[c] >= 5 ? static_cast<double>(face_d_out[c]) / face_d_n[c] : 0.0;
   }
+  // Trim: most face points of the sub-column stand out of the wall (a corner
+  // with another wall mixes points at all offsets and stays below).
+  for (int c = 0; c < sub; ++c)
+    casing_share[c] = face_d_n[c] >= 5 ? static_cast<double>(face_d_out[c]) / face_d_n[c] : 0.0;
   auto colS = [&](int c) { return s_lo + c * cell; };
   if (std::getenv("DSR_DEBUG_COLUMNS"))
     for (int c = 0; c < cols; ++c)
-      std::fprintf(stderr, "col wall=(%.2f,%.2f) s=%.2f face=%.2f expl=%.2f casing=%.2f\n", wall.point.x(), wall.point.y(), colS(c), face[c], expl[c], casing_share[c]);
+      std::fprintf(stderr, "col wall=(%.2f,%.2f) s=%.2f face=%.2f expl=%.2f casing=%.2f %.2f\n", wall.point.x(), wall.point.y(), colS(c), face[c], expl[c], casing_share[2 * c], casing_share[2 * c + 1]);
 
   std::vector<Doorway> out;
   auto addCandidate = [&](double s0, double s1, bool casing) {
@@ -193,37 +197,40 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     out.push_back(d);
   };
 
-  // (1) Trim legs: columns of face points standing out of the wall.
+  // (1) Trim legs: runs of sub-columns whose face points stand out of the
+  // wall, paired across a doorway under a head of trim (the edges of two
+  // cupboards or of a leaf touching the wall make legs, never a head).
+  const double half = cell / 2;
+  auto subS = [&](int c) { return s_lo + c * half; };
   std::vector<std::pair<int, int>> legs;
-  for (int c = 0; c < cols;) {
-    auto isCasing = [&](int k) { return casing_share[k] >= 0.7 && face[k] >= 0.5; };
-    if (!isCasing(c)) {
+  for (int c = 0; c < sub;) {
+    if (casing_share[c] < 0.7) {
       ++c;
       continue;
     }
     int e = c;
-    while (e + 1 < cols && isCasing(e + 1)) ++e;
-    const double w = (e - c + 1) * cell;
-    if (w >= 0.03 && w <= 0.2) legs.push_back({c, e});
+    while (e + 1 < sub && casing_share[e + 1] >= 0.7) ++e;
+    const double w = (e - c + 1) * half;
+    if (w <= 0.2) legs.push_back({c, e});
     c = e + 1;
   }
-  // Refine a leg's inner edge from its points standing out of the face.
-  auto legEdge = [&](int c0, int c1, bool right_edge) {
-    std::vector<double> s;
-    for (const auto& pt : points) {
-      const double d = wall.signedDistance(pt);
-      if (d <= p.casing_min_offset * 1.3 || d > p.face_tolerance || pt.z() < floor_z + 0.3 || pt.z() > floor_z + 1.9) continue;
-      const double a = wall.along(pt);
-      if (a >= colS(c0) - cell && a <= colS(c1 + 1) + cell) s.push_back(a);
+  auto hasHead = [&](double a, double b) {
+    const int c0 = std::max(0, static_cast<int>((a - s_lo) / cell)), c1 = std::min(cols - 1, static_cast<int>((b - s_lo) / cell));
+    for (int r = body1; r < rows; ++r) {
+      int f = 0, o = 0;
+      for (int c = c0; c <= c1; ++c) {
+        const Cell& g = grid[static_cast<std::size_t>(r) * cols + c];
+        f += g.face;
+        o += g.out;
+      }
+      if (f >= 5 && o >= 0.7 * f) return true;
     }
-    if (s.size() < 5) return right_edge ? colS(c1 + 1) : colS(c0);
-    std::sort(s.begin(), s.end());
-    return right_edge ? s[s.size() * 97 / 100] : s[s.size() * 3 / 100];
+    return false;
   };
   for (std::size_t i = 0; i + 1 < legs.size(); ++i) {
-    const double inner = colS(legs[i + 1].first) - colS(legs[i].second + 1);
-    if (inner >= p.door_min_width - 0.1 && inner <= p.door_max_width + 0.1) {
-      addCandidate(legEdge(legs[i].first, legs[i].second, true), legEdge(legs[i + 1].first, legs[i + 1].second, false), true);
+    const double a = subS(legs[i].second + 1), b = subS(legs[i + 1].first);
+    if (b - a >= p.door_min_width - 0.1 && b - a <= p.door_max_width + 0.1 && hasHead(a, b)) {
+      addCandidate(a, b, true);
       ++i;
     }
   }

@@ -36,7 +36,8 @@ struct Local {  // a point in wall coordinates: s along, d towards the viewer
 }  // namespace
 
 LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlane& wall,
-                const recognition::Doorway& door, double floor_z, double t, const Parameters& p) {
+                const recognition::Doorway& door, double floor_z, double t, const Eigen::Vector3f& viewpoint,
+                const Parameters& p) {
   LeafFit fit;
   const double w = door.width(), L = std::max(0.1, w - 0.008), lt = p.leaf_thickness, tol = p.leaf_tolerance;
   const double z0 = floor_z + 0.25;
@@ -59,22 +60,45 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     pts.push_back({s, d, zb, static_cast<int>(i)});
   }
 
-  // Exhaustive search over hinge side, swing side and angle.
+  // Rays from the sensor that pass near the doorway: a leaf cannot stand
+  // where a ray went through to something farther away (free space).
+  struct Ray {
+    Eigen::Vector2d v, q;  // (s, d) of sensor and point
+    double vz, qz, len;
+  };
+  std::vector<Ray> rays;
+  const Eigen::Vector2d vsd(wall.along(viewpoint), wall.signedDistance(viewpoint));
+  const Eigen::Vector2d dc(sc, -t / 2);
+  for (const auto& q : points) {
+    const Eigen::Vector2d qsd(wall.along(q), wall.signedDistance(q));
+    const Eigen::Vector2d r = qsd - vsd;
+    const double len2 = r.squaredNorm();
+    if (len2 < 1e-6) continue;
+    const double lam = std::clamp((dc - vsd).dot(r) / len2, 0.0, 1.0);
+    if ((vsd + lam * r - dc).norm() > reach) continue;
+    rays.push_back({vsd, qsd, viewpoint.z(), q.z(), std::sqrt(len2)});
+  }
+
+  // Exhaustive search over hinge side, swing side and angle: cells of the
+  // leaf holding points (support) against cells rays went through (contradiction).
   const int na = std::max(1, static_cast<int>(std::ceil(L / abin)));
   const double expected = static_cast<double>(na) * nz;
-  double best = -1;
-  int best_h = 0, best_sw = 0, best_deg = 0;
-  std::vector<char> seen(static_cast<std::size_t>(na) * nz);
+  double best = -1e9;
+  int best_h = 0, best_sw = 0, best_deg = 0, best_support = 0;
+  int contra_table[2][2][181];
+  std::vector<char> seen(static_cast<std::size_t>(na) * nz), blocked(seen.size());
   for (int h = 0; h < 2; ++h)
     for (int sw = 0; sw < 2; ++sw) {
       const double s_h = h == 0 ? door.s0 : door.s1, e0 = h == 0 ? 1.0 : -1.0;
       const double m = sw == 0 ? 1.0 : -1.0, d_h = sw == 0 ? 0.0 : -t;
+      const Eigen::Vector2d H(s_h, d_h);
       for (int deg = 0; deg <= 180; ++deg) {
         const double th = deg * M_PI / 180, c = std::cos(th), sn = std::sin(th);
         // e = c*e0*u + sn*m*n ; k = sn*e0*u - c*m*n
         const Eigen::Vector2d e(c * e0, sn * m), k(sn * e0, -c * m);
         std::fill(seen.begin(), seen.end(), 0);
-        int cells = 0;
+        std::fill(blocked.begin(), blocked.end(), 0);
+        int cells = 0, contra = 0;
         for (const Local& q : pts) {
           const Eigen::Vector2d r(q.s - s_h, q.d - d_h);
           const double a = r.dot(e), b = r.dot(k);
@@ -82,9 +106,28 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
           char& f = seen[static_cast<std::size_t>(std::min(na - 1, static_cast<int>(a / abin))) * nz + q.zbin];
           if (!f) f = 1, ++cells;
         }
-        if (cells > best) best = cells, best_h = h, best_sw = sw, best_deg = deg;
+        // The leaf's mid-plane segment, shifted to its middle of thickness.
+        const Eigen::Vector2d P = H + k * (lt / 2);
+        for (const Ray& ray : rays) {
+          const Eigen::Vector2d r = ray.q - ray.v;
+          const double denom = r.x() * e.y() - r.y() * e.x();
+          if (std::abs(denom) < 1e-9) continue;
+          const Eigen::Vector2d w0 = P - ray.v;
+          const double lam = (w0.x() * e.y() - w0.y() * e.x()) / denom;
+          const double a = (w0.x() * r.y() - w0.y() * r.x()) / denom;
+          if (a < 0.05 || a > L - 0.05 || lam <= 0 || lam > 1 - 0.06 / ray.len) continue;
+          const double z = ray.vz + lam * (ray.qz - ray.vz);
+          if (z < z0 || z >= z1) continue;
+          char& f = blocked[static_cast<std::size_t>(std::min(na - 1, static_cast<int>(a / abin))) * nz +
+                            std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
+          if (!f) f = 1, ++contra;
+        }
+        contra_table[h][sw][deg] = contra;
+        const double score = cells - 2.0 * contra;
+        if (score > best) best = score, best_h = h, best_sw = sw, best_deg = deg, best_support = cells;
       }
     }
+  (void)contra_table;
 
   // A closed leaf anywhere inside the wall's thickness (flush or recessed).
   std::set<std::pair<int, int>> band_cells;
@@ -100,7 +143,8 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     band_angle = std::acos(std::min(1.0, std::abs(l.direction.x()))) * 180 / M_PI;
   }
 
-  const double gen_cov = std::max(0.0, best) / expected;
+  const double gen_cov = best_support / expected;
+  const double gen_contra = contra_table[best_h][best_sw][best_deg] / expected;
   fit.length = L;
   fit.hinge_at_s0 = best_h == 0;
   fit.toward_viewer = best_sw == 0;
@@ -122,7 +166,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     fit.toward_viewer = -fit.face_d < (t - lt) / 2;
     fit.coverage = band_cov;
     for (const Local& q : band) fit.inliers.push_back(q.index);
-  } else if (gen_cov >= p.min_leaf_coverage) {
+  } else if (gen_cov >= p.min_leaf_coverage && gen_contra < 0.1) {
     fit.found = true;
     fit.coverage = gen_cov;
     // Refine the angle: TLS line through the inliers of the best hypothesis.

@@ -39,7 +39,7 @@ struct Parameters {
   double door_min_height = 1.7;      // m
   double door_height_ratio = 0.75;   // the paper's rule: door height >= ratio * wall height - phi
   double door_height_phi = 0.5;      // m, the paper allows 0..0.5
-  double grid_cell = 0.04;           // m, cell of a wall's evidence grid (along the wall)
+  double grid_cell = 0.04;           // m, cell of a wall's evidence grid (along the wall); trim is sought at half of it
   double face_tolerance = 0.03;      // m, a point this close to a wall plane lies on its face
   double casing_min_offset = 0.008;  // m, trim stands at least this far out of the wall face
   double default_wall_thickness = 0.15;  // m, when the jambs are not seen

@@ -39,7 +39,8 @@ struct LeafFit {
 };
 
 LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlane& wall,
-                const recognition::Doorway& doorway, double floor_z, double thickness, const Parameters& p);
+                const recognition::Doorway& doorway, double floor_z, double thickness,
+                const Eigen::Vector3f& viewpoint, const Parameters& p);
 
 DoorStateKind classify(double angle_deg, const Parameters& p);
 
