@@ -152,8 +152,11 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
       const state::LeafFit leaf = state::fitLeaf(pts, wall, d, floor_z, t, viewpoint, p);
       if (!leaf.found) {
         char buf[300];
-        std::snprintf(buf, sizeof buf, "wall %zu: doorway s=[%.2f, %.2f] casing=%d through=%.2f front=%.2f recess=%.2f | no leaf",
-                      wi, d.s0, d.s1, d.casing, d.through, d.front, d.recess);
+        std::snprintf(buf, sizeof buf,
+                      "wall %zu: doorway s=[%.2f, %.2f] casing=%d through=%.2f front=%.2f recess=%.2f | no leaf "
+                      "(best: %.0f deg, coverage %.2f, contradicted %.2f)",
+                      wi, d.s0, d.s1, d.casing, d.through, d.front, d.recess, leaf.best_angle_deg, leaf.best_coverage,
+                      leaf.best_contradiction);
         res.trace.push_back(buf);
         continue;
       }
@@ -164,7 +167,8 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
       const double height = (std::isfinite(d.top) ? d.top : leaf.top_z) - floor_z;
       const double wall_h = top_z - floor_z;
       const bool tall = height >= p.door_min_height && height >= p.door_height_ratio * wall_h - p.door_height_phi;
-      const bool wide = d.width() >= p.door_min_width && d.width() <= p.door_max_width;
+      const double width = std::abs(leaf.s_latch - leaf.s_hinge);
+      const bool wide = width >= p.door_min_width && width <= p.door_max_width;
       {
         char buf[400];
         std::snprintf(buf, sizeof buf,
@@ -188,9 +192,9 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
       const Eigen::Vector2d n2 = leaf.toward_viewer ? wall.normal : Eigen::Vector2d(-wall.normal);
       door.wall_normal = toInput(Eigen::Vector3d(n2.x(), n2.y(), 0));
       door.hinge = toInput(onFloor(leaf.hinge));
-      const Eigen::Vector2d center = wall.point + ((d.s0 + d.s1) / 2) * wall.direction - (t / 2) * wall.normal;
+      const Eigen::Vector2d center = wall.point + ((leaf.s_hinge + leaf.s_latch) / 2) * wall.direction - (t / 2) * wall.normal;
       door.opening_center = toInput(onFloor(center));
-      door.width = d.width();
+      door.width = std::abs(leaf.s_latch - leaf.s_hinge);
       door.height = height;
       const double bottom = floor_z + 0.01, top = std::max(leaf.top_z, floor_z + 0.5);
       const Eigen::Vector2d latch = leaf.hinge + leaf.length * leaf.direction;
@@ -212,7 +216,7 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
       if (duplicate) continue;
       for (int i : leaf.inliers) is_leaf[i] = 1;
       res.doors.push_back(door);
-      openings.push_back({static_cast<int>(wi), d.s0, d.s1, floor_z + height, leaf.hinge, leaf.direction, leaf.length,
+      openings.push_back({static_cast<int>(wi), std::min(leaf.s_hinge, leaf.s_latch), std::max(leaf.s_hinge, leaf.s_latch), floor_z + height, leaf.hinge, leaf.direction, leaf.length,
                           bottom, top});
     }
   }

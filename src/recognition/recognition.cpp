@@ -3,8 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
+#include <limits>
 
 namespace dsr {
 namespace recognition {
@@ -178,9 +177,6 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   for (int c = 0; c < sub; ++c)
     casing_share[c] = face_d_n[c] >= 5 ? static_cast<double>(face_d_out[c]) / face_d_n[c] : 0.0;
   auto colS = [&](int c) { return s_lo + c * cell; };
-  if (std::getenv("DSR_DEBUG_COLUMNS"))
-    for (int c = 0; c < cols; ++c)
-      std::fprintf(stderr, "col wall=(%.2f,%.2f) s=%.2f face=%.2f expl=%.2f casing=%.2f %.2f\n", wall.point.x(), wall.point.y(), colS(c), face[c], expl[c], casing_share[2 * c], casing_share[2 * c + 1]);
 
   std::vector<Doorway> out;
   auto addCandidate = [&](double s0, double s1, bool casing) {
@@ -269,6 +265,16 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
 
   // Shares, head and thickness of every candidate.
   for (Doorway& d : out) {
+    // An opening with a trim leg at one of its edges and a head above: the
+    // other leg may hide behind a leaf swung towards the sensor.
+    if (!d.casing)
+      for (const auto& leg : legs) {
+        const double inner_right = subS(leg.second + 1), inner_left = subS(leg.first);
+        if ((std::abs(inner_right - d.s0) < 0.12 || std::abs(inner_left - d.s1) < 0.12) && hasHead(d.s0, d.s1)) {
+          d.casing = true;
+          break;
+        }
+      }
     const int c0 = std::max(0, static_cast<int>((d.s0 - s_lo) / cell) + 1);
     const int c1 = std::min(cols - 1, static_cast<int>((d.s1 - s_lo) / cell) - 1);
     int n = 0, f = 0, t = 0, fr = 0, re = 0;

@@ -55,7 +55,8 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     const int zb = std::min(nz - 1, static_cast<int>((q.z() - z0) / zbin));
     const bool inside = s > door.s0 + 0.03 && s < door.s1 - 0.03;
     const bool in_wall_band = d > -t - 0.03 && d < p.face_tolerance + 0.01;
-    if (in_wall_band && inside) band.push_back({s, d, zb, static_cast<int>(i)});
+    // A closed leaf may sit deeper than the estimated thickness (jambs unseen).
+    if (inside && d > -std::max(t, 0.3) - 0.03 && d < p.face_tolerance + 0.01) band.push_back({s, d, zb, static_cast<int>(i)});
     if (in_wall_band && !inside) continue;  // wall, trim and jambs beside the doorway
     pts.push_back({s, d, zb, static_cast<int>(i)});
   }
@@ -85,12 +86,21 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   const double expected = static_cast<double>(na) * nz;
   double best = -1e9;
   int best_h = 0, best_sw = 0, best_deg = 0, best_support = 0;
+  // Hinge depth: on the face of its swing side, or set back by a recess.
+  const double recess_steps[3] = {0.0, 0.04, 0.08};
   int contra_table[2][2][181];
+  for (auto& a : contra_table)
+    for (auto& b : a)
+      for (int& c : b) c = 1 << 20;
+  double best_recess = 0;
+  int best_contra = 0;
   std::vector<char> seen(static_cast<std::size_t>(na) * nz), blocked(seen.size());
   for (int h = 0; h < 2; ++h)
-    for (int sw = 0; sw < 2; ++sw) {
+    for (int sw = 0; sw < 2; ++sw)
+    for (double rec : recess_steps) {
+      if (rec > 0 && rec + lt > t) continue;
       const double s_h = h == 0 ? door.s0 : door.s1, e0 = h == 0 ? 1.0 : -1.0;
-      const double m = sw == 0 ? 1.0 : -1.0, d_h = sw == 0 ? 0.0 : -t;
+      const double m = sw == 0 ? 1.0 : -1.0, d_h = sw == 0 ? -rec : -t + rec;
       const Eigen::Vector2d H(s_h, d_h);
       for (int deg = 0; deg <= 180; ++deg) {
         const double th = deg * M_PI / 180, c = std::cos(th), sn = std::sin(th);
@@ -122,9 +132,9 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
                             std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
           if (!f) f = 1, ++contra;
         }
-        contra_table[h][sw][deg] = contra;
+        contra_table[h][sw][deg] = std::min(contra_table[h][sw][deg], contra);
         const double score = cells - 2.0 * contra;
-        if (score > best) best = score, best_h = h, best_sw = sw, best_deg = deg, best_support = cells;
+        if (score > best) best = score, best_h = h, best_sw = sw, best_deg = deg, best_support = cells, best_recess = rec, best_contra = contra;
       }
     }
   (void)contra_table;
@@ -144,13 +154,36 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   }
 
   const double gen_cov = best_support / expected;
-  const double gen_contra = contra_table[best_h][best_sw][best_deg] / expected;
+  const double gen_contra = best_contra / expected;
+  fit.best_angle_deg = best_deg;
+  fit.best_coverage = gen_cov;
+  fit.best_contradiction = gen_contra;
   fit.length = L;
   fit.hinge_at_s0 = best_h == 0;
   fit.toward_viewer = best_sw == 0;
-  const double s_h = best_h == 0 ? door.s0 : door.s1, e0 = best_h == 0 ? 1.0 : -1.0;
-  const double m = best_sw == 0 ? 1.0 : -1.0, d_h = best_sw == 0 ? 0.0 : -t;
+  double s_h = best_h == 0 ? door.s0 : door.s1;
+  const double s_other = best_h == 0 ? door.s1 : door.s0, e0 = best_h == 0 ? 1.0 : -1.0;
+  const double m = best_sw == 0 ? 1.0 : -1.0, d_h = best_sw == 0 ? -best_recess : -t + best_recess;
   auto toXY = [&](double s, double d) { return wall.point + s * wall.direction + d * wall.normal; };
+  // Support of one hypothesis (cells holding points), with its inliers.
+  auto support = [&](double sh, double th_deg, double len, double band_lo, double band_hi, std::vector<int>* inl,
+                     std::vector<Eigen::Vector2d>* xy) {
+    const double th = th_deg * M_PI / 180;
+    const Eigen::Vector2d e(std::cos(th) * e0, std::sin(th) * m), k(std::sin(th) * e0, -std::cos(th) * m);
+    const int nl = std::max(1, static_cast<int>(std::ceil(len / abin)));
+    std::vector<char> hit(static_cast<std::size_t>(nl) * nz, 0);
+    int cells = 0;
+    for (const Local& q : pts) {
+      const Eigen::Vector2d r(q.s - sh, q.d - d_h);
+      const double a = r.dot(e), b = r.dot(k);
+      if (a < 0.02 || a > len || b < band_lo || b > band_hi) continue;
+      char& f = hit[static_cast<std::size_t>(std::min(nl - 1, static_cast<int>(a / abin))) * nz + q.zbin];
+      if (!f) f = 1, ++cells;
+      if (inl) inl->push_back(q.index);
+      if (xy) xy->emplace_back(q.s, q.d);
+    }
+    return static_cast<double>(cells) / (static_cast<double>(nl) * nz);
+  };
 
   if (band_cov >= 0.55 && (best_deg < p.closed_below_deg + 3 || gen_cov < band_cov)) {
     fit.found = true;
@@ -166,29 +199,50 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     fit.toward_viewer = -fit.face_d < (t - lt) / 2;
     fit.coverage = band_cov;
     for (const Local& q : band) fit.inliers.push_back(q.index);
-  } else if (gen_cov >= p.min_leaf_coverage && gen_contra < 0.1) {
-    fit.found = true;
-    fit.coverage = gen_cov;
-    // Refine the angle: TLS line through the inliers of the best hypothesis.
-    const double th = best_deg * M_PI / 180;
-    const Eigen::Vector2d e(std::cos(th) * e0, std::sin(th) * m), k(std::sin(th) * e0, -std::cos(th) * m);
-    std::vector<Eigen::Vector2d> xy;
-    for (const Local& q : pts) {
-      const Eigen::Vector2d r(q.s - s_h, q.d - d_h);
-      const double a = r.dot(e), b = r.dot(k);
-      if (a < 0.05 || a > L || b < -tol || b > lt + tol) continue;
-      xy.emplace_back(q.s, q.d);
-      fit.inliers.push_back(q.index);
-    }
-    double angle = best_deg;
-    if (xy.size() >= 10) {
+  } else if (gen_cov >= 0.1 && gen_contra < 0.1) {
+    // Refine: a TLS line through the inliers gives the angle; where it meets
+    // the wall face on the swing side is the hinge (the doorway's edge seen
+    // from the wall can be off where the leaf shadows the wall).
+    double angle = best_deg, len = L;
+    for (int iter = 0; iter < 3; ++iter) {
+      std::vector<Eigen::Vector2d> xy;
+      support(s_h, angle, len + 0.1, -0.05, lt + 0.05, nullptr, &xy);
+      if (xy.size() < 10) break;
       Line2 l = fitLine(xy);
+      const double th = angle * M_PI / 180;
+      const Eigen::Vector2d e(std::cos(th) * e0, std::sin(th) * m);
       if (l.direction.dot(e) < 0) l.direction = -l.direction;
-      angle = std::atan2(l.direction.y() * m, l.direction.x() * e0) * 180 / M_PI;
-      if (std::abs(angle - best_deg) > 5) angle = best_deg;  // keep the search's answer if the fit wandered
+      const double refined = std::atan2(l.direction.y() * m, l.direction.x() * e0) * 180 / M_PI;
+      if (std::abs(refined - angle) > 8) break;  // the fit wandered off: keep the search's answer
+      angle = std::clamp(refined, 0.0, 180.0);
+      if (angle > 12 && angle < 168) {
+        // The visible face is the one towards the sensor; the hinge line is
+        // the swing face: shift the fitted line by the thickness if needed.
+        const Eigen::Vector2d kk(std::sin(angle * M_PI / 180) * e0, -std::cos(angle * M_PI / 180) * m);
+        Eigen::Vector2d on = l.point;
+        if ((vsd - l.point).dot(kk) > 0) on -= kk * lt;  // sensor sees the back face: move to the swing face
+        const double lam = (d_h - on.y()) / l.direction.y();
+        const double s_new = on.x() + lam * l.direction.x();
+        if (std::abs(s_new - s_h) < 0.2) s_h = s_new;
+      }
+      const double new_len = std::abs(s_other - s_h) - 0.008;
+      if (new_len > p.door_min_width - 0.15 && new_len < p.door_max_width + 0.15) len = new_len;
     }
-    fit.angle_deg = std::min(180.0, std::max(0.0, angle));
+    std::vector<int> inl;
+    const double cov = support(s_h, angle, len, -tol, lt + tol, &inl, nullptr);
+    // A doorway beyond doubt (trim, or the room beyond seen through it) takes
+    // a leaf seen only edge-on or in part, as long as no ray contradicts it.
+    const bool sure_doorway = door.casing || door.through >= 0.4;
+    if (cov >= p.min_leaf_coverage || (sure_doorway && cov >= 0.5 * p.min_leaf_coverage && gen_contra <= 0.05)) {
+      fit.found = true;
+      fit.coverage = cov;
+      fit.angle_deg = angle;
+      fit.length = len;
+      fit.inliers = std::move(inl);
+    }
   }
+  fit.s_hinge = s_h;
+  fit.s_latch = s_other;
   if (!fit.found) return fit;
   const double th = fit.angle_deg * M_PI / 180;
   const Eigen::Vector2d dir_sd(std::cos(th) * e0, std::sin(th) * m);
@@ -206,7 +260,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     const double s = wall.along(q), d = wall.signedDistance(q);
     const Eigen::Vector2d r(s - s_h, d - (fit.closed_in_band ? -t / 2 : d_h));
     const double a = r.dot(dir_sd), b = std::abs(r.x() * dir_sd.y() - r.y() * dir_sd.x());
-    if (a > 0.05 && a < L && b < (fit.closed_in_band ? t / 2 + 0.03 : lt + tol)) top = std::max<double>(top, q.z());
+    if (a > 0.05 && a < fit.length && b < (fit.closed_in_band ? t / 2 + 0.03 : lt + tol)) top = std::max<double>(top, q.z());
   }
   fit.top_z = top;
   return fit;

@@ -34,7 +34,9 @@ struct LeafFit {
   Eigen::Vector2d hinge = Eigen::Vector2d::Zero();      // x, y
   Eigen::Vector2d direction = Eigen::Vector2d::UnitX(); // hinge -> latch, unit
   double length = 0, top_z = 0;
+  double s_hinge = 0, s_latch = 0;  // the doorway's jambs along the wall, refined by the fit
   double face_d = 0;            // closed leaf: depth of its visible face (<= 0, behind the wall face)
+  double best_angle_deg = 0, best_coverage = 0, best_contradiction = 0;  // best hypothesis, found or not
   std::vector<int> inliers;
 };
 
