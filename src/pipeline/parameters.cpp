@@ -24,6 +24,7 @@ Field field(T Parameters::*member) {
 const std::map<std::string, Field>& fields() {
   static const std::map<std::string, Field> f = {
       {"up_axis", field(&Parameters::up_axis)},
+      {"refine_up_deg", field(&Parameters::refine_up_deg)},
       {"voxel_size", field(&Parameters::voxel_size)},
       {"max_abs_coordinate", field(&Parameters::max_abs_coordinate)},
       {"max_points", field(&Parameters::max_points)},
@@ -78,6 +79,7 @@ void Parameters::validate() const {
   bool axis_ok = false;
   for (const char* a : axes) axis_ok |= up_axis == a;
   check(axis_ok, "up_axis", "one of +x -x +y -y +z -z auto");
+  check(in(refine_up_deg, 0, 45), "refine_up_deg", "in [0, 45] deg");
   check(voxel_size == 0 || in(voxel_size, 0.001, 1.0), "voxel_size", "0 or in [0.001, 1] m");
   check(in(max_abs_coordinate, 1, 1e7), "max_abs_coordinate", "in [1, 1e7] m");
   check(max_points >= 10 && max_points <= 500000000, "max_points", "in [10, 5e8]");

@@ -75,13 +75,18 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   if (raw.size() < cloud.size())
     res.warnings.push_back(std::to_string(cloud.size() - raw.size()) + " non-finite or out-of-range points dropped");
   std::optional<Eigen::Vector3d> up = preprocess::parseUpAxis(p.up_axis);
-  if (!up) {
+  {
+    // Normals of a coarse copy serve to estimate or to refine the up axis.
     const preprocess::Points coarse = preprocess::voxelDownsample(raw, 0.05);
     if (coarse.size() >= 50) {
       const segmentation::Tree tree = buildTree(coarse);
-      const segmentation::Normals nn =
-          segmentation::estimateNormals(coarse, tree, p.normal_k, Eigen::Vector3f::Zero());
-      up = preprocess::estimateUp(coarse, nn.n, static_cast<unsigned>(p.random_seed));
+      const segmentation::Normals nn = segmentation::estimateNormals(coarse, tree, p.normal_k, Eigen::Vector3f::Zero());
+      if (!up) {
+        up = preprocess::estimateUp(coarse, nn.n, static_cast<unsigned>(p.random_seed));
+        if (up) up = preprocess::refineUp(*up, nn.n, 10.0);
+      } else if (p.refine_up_deg > 0) {
+        up = preprocess::refineUp(*up, nn.n, p.refine_up_deg);
+      }
     }
     if (!up) {
       res.warnings.push_back("up axis could not be estimated; using +z");

@@ -1,5 +1,6 @@
 #include "door_state_recognition/preprocess/preprocess.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -131,6 +132,41 @@ std::optional<Eigen::Vector3d> estimateUp(const Points& points, const Points& no
   }
   if (above > below) up = -up;
   return up;
+}
+
+Eigen::Vector3d refineUp(const Eigen::Vector3d& up_in, const Points& normals, double max_deg) {
+  const Eigen::Vector3d up = up_in.normalized();
+  const double cos_max = std::cos(max_deg * M_PI / 180.0);
+  Eigen::Vector3d current = up;
+  // Two rounds: horizontal surfaces first, re-selected around the refined axis.
+  for (int round = 0; round < 2; ++round) {
+    Eigen::Vector3d acc = Eigen::Vector3d::Zero();
+    std::size_t n = 0;
+    for (const auto& nf : normals) {
+      const Eigen::Vector3d nd = nf.cast<double>();
+      const double c = nd.dot(current);
+      if (std::abs(c) < (round == 0 ? cos_max : std::cos(3.0 * M_PI / 180.0))) continue;
+      acc += c > 0 ? nd : Eigen::Vector3d(-nd);
+      ++n;
+    }
+    if (n < 200) break;
+    current = acc.normalized();
+  }
+  if (current != up && current.dot(up) >= cos_max) return current;
+  // Walls: up is the direction least present among vertical-surface normals.
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  std::size_t n = 0;
+  for (const auto& nf : normals) {
+    const Eigen::Vector3d nd = nf.cast<double>();
+    if (std::abs(nd.dot(up)) > std::sin(max_deg * M_PI / 180.0)) continue;
+    C += nd * nd.transpose();
+    ++n;
+  }
+  if (n < 500) return up;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
+  Eigen::Vector3d v = es.eigenvectors().col(0);
+  if (v.dot(up) < 0) v = -v;
+  return v.dot(up) >= cos_max ? v : up;
 }
 
 }  // namespace preprocess

@@ -182,8 +182,19 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
       const double h = w.z_max - floor_z;
       const bool tall = h >= p.wall_height_ratio * room_h && w.z_min < floor_z + 0.5;
       const bool reaches_top = !ceiling_known || w.z_max > height_top - 0.25;
+      // A plane parallel to a stronger wall and close behind or before it
+      // (a recessed leaf, trim, a cupboard front) is not another wall.
+      bool shadowed = false;
+      for (const WallPlane& o : walls) {
+        if (std::abs(o.normal.dot(w.normal)) < 0.995) continue;
+        const Eigen::Vector2d a = w.point + w.s_min * w.direction, b = w.point + w.s_max * w.direction;
+        const double off = std::abs((0.5 * (a + b) - o.point).dot(o.normal));
+        const double s0 = std::min((a - o.point).dot(o.direction), (b - o.point).dot(o.direction));
+        const double s1 = std::max((a - o.point).dot(o.direction), (b - o.point).dot(o.direction));
+        shadowed |= off < 0.3 && s0 < o.s_max && s1 > o.s_min;
+      }
       if (static_cast<int>(w.inliers.size()) >= p.min_wall_points && w.s_max - w.s_min >= p.min_wall_length && tall &&
-          reaches_top)
+          reaches_top && !shadowed)
         walls.push_back(std::move(w));
     }
   }

@@ -34,5 +34,11 @@ Points voxelDownsample(const Points& points, double leaf);
 // pairs with `points`. Returns nullopt when the cloud shows no structure.
 std::optional<Eigen::Vector3d> estimateUp(const Points& points, const Points& normals, unsigned seed);
 
+// Refines an approximate up axis (a camera frame is rarely exactly level):
+// the mean normal of horizontal surfaces within max_deg of it, or else the
+// direction perpendicular to the normals of the vertical surfaces. Returns
+// the given axis when neither is seen.
+Eigen::Vector3d refineUp(const Eigen::Vector3d& up, const Points& normals, double max_deg);
+
 }  // namespace preprocess
 }  // namespace dsr
