@@ -23,7 +23,7 @@ def one(args, seed, out):
     up = args.up or ("-y" if args.sensor == "rgbd" else "+z")
     subprocess.run([str(BIN / "door_state_cli"), "--quiet", "--up", up, "--json", f"{prefix}.report.json",
                     f"{prefix}.pcd"], check=True)
-    res = subprocess.run([str(BIN / "door_state_eval"), f"{prefix}.json", f"{prefix}.report.json"],
+    res = subprocess.run([str(BIN / "door_state_eval"), "--in-view-only", f"{prefix}.json", f"{prefix}.report.json"],
                          check=True, capture_output=True, text=True)
     return seed, prefix, json.loads(res.stdout)
 
@@ -55,7 +55,7 @@ def main():
                             for m in r["matches"])
             print(f"seed {seed}: truth [{desc}] matched {r['matched']}/{r['true_doors']} reported {r['reported_doors']}"
                   f" errs(deg/m) {errs} missed {r['missed_truth']} extra {r['unmatched_report']}", file=sys.stderr)
-    merged = subprocess.run([str(BIN / "door_state_eval"), "--pairs", str(pairs)], check=True,
+    merged = subprocess.run([str(BIN / "door_state_eval"), "--in-view-only", "--pairs", str(pairs)], check=True,
                             capture_output=True, text=True)
     m = json.loads(merged.stdout)
     summary = {k: m.get(k) for k in ["scenes", "true_doors", "reported_doors", "matched", "precision", "recall",

@@ -21,14 +21,16 @@ using nlohmann::json;
 namespace {
 
 const char* kUsage =
-    "usage: door_state_eval [--max-distance M] GROUND_TRUTH.json REPORT.json\n"
-    "       door_state_eval [--max-distance M] --pairs LIST.txt\n"
+    "usage: door_state_eval [--max-distance M] [--in-view-only] GROUND_TRUTH.json REPORT.json\n"
+    "       door_state_eval [--max-distance M] [--in-view-only] --pairs LIST.txt\n"
     "\n"
     "Scores a door-state report against simulator ground truth and prints the\n"
     "result as JSON on stdout.\n"
     "\n"
     "  --max-distance M  max horizontal distance between opening centres for a\n"
     "                    match, metres (default 0.5, must be >= 0)\n"
+    "  --in-view-only    leave out true doors marked \"in_view\": false (outside a\n"
+    "                    camera's view): neither missed nor false positives\n"
     "  --pairs LIST.txt  evaluate many scenes: each line holds \"GT.json REPORT.json\"\n"
     "                    (relative paths are taken relative to LIST.txt's folder;\n"
     "                    blank lines and lines starting with '#' are skipped);\n"
@@ -67,10 +69,10 @@ json readJson(const std::string& path) {
   }
 }
 
-dsr::eval::EvalResult evalPair(const std::string& gt, const std::string& rep, double max_dist) {
+dsr::eval::EvalResult evalPair(const std::string& gt, const std::string& rep, double max_dist, bool in_view_only) {
   const json truth = readJson(gt), report = readJson(rep);
   try {
-    return dsr::eval::evaluate(truth, report, max_dist);
+    return dsr::eval::evaluate(truth, report, max_dist, in_view_only);
   } catch (const std::invalid_argument& e) {
     // Messages start with "truth" or "report": name the matching file.
     const std::string msg = e.what();
@@ -105,6 +107,7 @@ int usageError(const std::string& msg) {
 
 int main(int argc, char** argv) {
   double max_dist = 0.5;
+  bool in_view_only = false;
   std::string pairs_file;
   std::vector<std::string> files;
   bool options_done = false;
@@ -125,6 +128,8 @@ int main(int argc, char** argv) {
       if (v.empty() || *end != '\0' || !std::isfinite(max_dist))
         return usageError("--max-distance: not a number: '" + v + "'");
       if (max_dist < 0) return usageError("--max-distance must be >= 0, got " + v);
+    } else if (a == "--in-view-only") {
+      in_view_only = true;
     } else if (a == "--pairs") {
       if (++i >= argc) return usageError("--pairs needs a file");
       if (!pairs_file.empty()) return usageError("--pairs given twice");
@@ -139,10 +144,10 @@ int main(int argc, char** argv) {
   try {
     json out;
     if (pairs_file.empty()) {
-      out = dsr::eval::toJson(evalPair(files[0], files[1], max_dist));
+      out = dsr::eval::toJson(evalPair(files[0], files[1], max_dist, in_view_only));
     } else {
       std::vector<dsr::eval::EvalResult> results;
-      for (const auto& [gt, rep] : readPairs(pairs_file)) results.push_back(evalPair(gt, rep, max_dist));
+      for (const auto& [gt, rep] : readPairs(pairs_file)) results.push_back(evalPair(gt, rep, max_dist, in_view_only));
       out = dsr::eval::toJson(dsr::eval::merge(results));
       out["scenes"] = results.size();
     }

@@ -20,6 +20,7 @@ struct Door {
   Eigen::Vector3d center, hinge;
   double angle;
   std::string state;
+  bool out_of_view = false;  // truth only: "in_view": false
 };
 
 [[noreturn]] void fail(const std::string& where, const std::string& what) {
@@ -108,13 +109,21 @@ double EvalResult::hingeErrorMedianM() const {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-EvalResult evaluate(const json& truth, const json& report, double max_center_distance_m) {
+EvalResult evaluate(const json& truth, const json& report, double max_center_distance_m, bool in_view_only) {
   if (!std::isfinite(max_center_distance_m) || max_center_distance_m < 0)
     throw std::invalid_argument("max_center_distance_m must be a finite number >= 0");
   if (!truth.is_object()) fail("truth", "expected a JSON object");
   if (!report.is_object()) fail("report", "expected a JSON object");
   const Eigen::Vector3d up = parseUp(truth);
-  const std::vector<Door> t = parseDoors(truth, "truth"), r = parseDoors(report, "report");
+  std::vector<Door> t = parseDoors(truth, "truth");
+  const std::vector<Door> r = parseDoors(report, "report");
+  if (in_view_only) {
+    const json& arr = truth.at("doors");
+    for (std::size_t i = 0; i < t.size(); ++i) {
+      const auto it = arr[i].find("in_view");
+      t[i].out_of_view = it != arr[i].end() && it->is_boolean() && !it->get<bool>();
+    }
+  }
 
   // All eligible pairs, sorted by (distance, truth index, report index).
   std::vector<std::tuple<double, int, int>> pairs;
@@ -130,9 +139,14 @@ EvalResult evaluate(const json& truth, const json& report, double max_center_dis
   res.true_doors = int(t.size());
   res.reported_doors = int(r.size());
   std::vector<bool> t_used(t.size(), false), r_used(r.size(), false);
+  for (const Door& d : t) res.true_doors -= d.out_of_view;
   for (const auto& [dist, i, j] : pairs) {
     if (t_used[i] || r_used[j]) continue;
     t_used[i] = r_used[j] = true;
+    if (t[i].out_of_view) {  // a door outside the view counts neither way
+      --res.reported_doors;
+      continue;
+    }
     const bool ok = t[i].state == r[j].state;
     res.matches.push_back({i, j, dist, ok, std::abs(r[j].angle - t[i].angle), (r[j].hinge - t[i].hinge).norm()});
     res.state_correct += ok;
@@ -141,7 +155,7 @@ EvalResult evaluate(const json& truth, const json& report, double max_center_dis
   std::sort(res.matches.begin(), res.matches.end(),
             [](const DoorMatch& a, const DoorMatch& b) { return a.truth_index < b.truth_index; });
   for (int i = 0; i < int(t.size()); ++i)
-    if (!t_used[i]) res.missed_truth.push_back(i);
+    if (!t_used[i] && !t[i].out_of_view) res.missed_truth.push_back(i);
   for (int j = 0; j < int(r.size()); ++j)
     if (!r_used[j]) res.unmatched_report.push_back(j);
   return res;

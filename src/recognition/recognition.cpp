@@ -119,6 +119,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   // Trim is sought on sub-columns of half a cell, summed over the body.
   const int sub = 2 * cols;
   std::vector<int> face_d_out(sub, 0), face_d_n(sub, 0);
+  std::vector<double> face_d_sum(sub, 0.0);
   const double d_view = wall.signedDistance(viewpoint);
   if (d_view <= 0) return {};
   auto cellAt = [&](double s, double z) -> Cell* {
@@ -127,10 +128,21 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     return &grid[static_cast<std::size_t>(r) * cols + c];
   };
   const double footprint = std::max(p.voxel_size, 0.01);
+  // The wall's own noise sets how thick its face is: laser scans are
+  // millimetre-sharp, far depth-camera returns are centimetres apart.
+  double tol = p.face_tolerance;
+  {
+    std::vector<double> dev;
+    for (int i : wall.inliers) dev.push_back(std::abs(wall.signedDistance(points[i])));
+    if (dev.size() >= 20) {
+      std::nth_element(dev.begin(), dev.begin() + dev.size() / 2, dev.end());
+      tol = std::max(tol, 2.5 * 1.4826 * dev[dev.size() / 2]);
+    }
+  }
   for (const auto& pt : points) {
     const double d = wall.signedDistance(pt);
     if (d >= d_view) continue;  // beside or behind the sensor
-    if (std::abs(d) <= p.face_tolerance) {
+    if (std::abs(d) <= tol) {
       const double s = wall.along(pt);
       if (Cell* c = cellAt(s, pt.z())) {
         ++c->face;
@@ -138,6 +150,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
         if (pt.z() > floor_z + 0.3 && pt.z() < floor_z + 1.9) {
           const int col = std::min(sub - 1, static_cast<int>((s - s_lo) / (cell / 2)));
           face_d_out[col] += d > p.casing_min_offset;
+          face_d_sum[col] += d;
           ++face_d_n[col];
         }
       }
@@ -162,6 +175,8 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   const int body0 = static_cast<int>(0.25 / row_h), body1 = std::min(rows, static_cast<int>(1.75 / row_h));
   const int nbody = std::max(1, body1 - body0);
   std::vector<double> face(cols), expl(cols), casing_share(sub, 0.0);
+  // Shares among the observed cells of a column: a camera may see nothing
+  // at all through the upper part of a doorway (the room beyond out of range).
   for (int c = 0; c < cols; ++c) {
     int f = 0, e = 0;
     for (int r = body0; r < body1; ++r) {
@@ -169,13 +184,17 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       if (g.face) ++f;
       else if (g.through || g.front || g.recess) ++e;
     }
-    face[c] = static_cast<double>(f) / nbody;
-    expl[c] = static_cast<double>(e) / nbody;
+    const int observed = f + e;
+    const bool enough = observed >= 0.25 * nbody;
+    face[c] = enough ? static_cast<double>(f) / observed : (f > 0 ? 1.0 : 0.0);
+    expl[c] = enough ? static_cast<double>(e) / observed : 0.0;
   }
   // Trim: most face points of the sub-column stand out of the wall (a corner
   // with another wall mixes points at all offsets and stays below).
   for (int c = 0; c < sub; ++c)
-    casing_share[c] = face_d_n[c] >= 5 ? static_cast<double>(face_d_out[c]) / face_d_n[c] : 0.0;
+    casing_share[c] = face_d_n[c] >= 5 && face_d_sum[c] / face_d_n[c] > p.casing_min_offset
+                          ? static_cast<double>(face_d_out[c]) / face_d_n[c]
+                          : 0.0;
   auto colS = [&](int c) { return s_lo + c * cell; };
 
   std::vector<Doorway> out;
@@ -200,12 +219,12 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   auto subS = [&](int c) { return s_lo + c * half; };
   std::vector<std::pair<int, int>> legs;
   for (int c = 0; c < sub;) {
-    if (casing_share[c] < 0.7) {
+    if (casing_share[c] < 0.6) {
       ++c;
       continue;
     }
     int e = c;
-    while (e + 1 < sub && casing_share[e + 1] >= 0.7) ++e;
+    while (e + 1 < sub && casing_share[e + 1] >= 0.6) ++e;
     const double w = (e - c + 1) * half;
     if (w <= 0.2) legs.push_back({c, e});
     c = e + 1;
@@ -246,7 +265,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     double s0 = colS(c), s1 = colS(e + 1);
     std::vector<double> left, right;
     for (const auto& pt : points) {
-      if (std::abs(wall.signedDistance(pt)) > p.face_tolerance || pt.z() < floor_z + 0.25 || pt.z() > floor_z + 1.75) continue;
+      if (std::abs(wall.signedDistance(pt)) > tol || pt.z() < floor_z + 0.25 || pt.z() > floor_z + 1.75) continue;
       const double a = wall.along(pt);
       if (a > s0 - 0.12 && a < s0 + 0.06) left.push_back(a);
       if (a > s1 - 0.06 && a < s1 + 0.12) right.push_back(a);
@@ -287,6 +306,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
         else if (g.recess) ++re;
         else if (g.front) ++fr;
       }
+    n = f + t + fr + re;  // observed cells
     if (n > 0) {
       d.face = static_cast<double>(f) / n;
       d.through = static_cast<double>(t) / n;
@@ -305,12 +325,12 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     std::vector<double> depth_l, depth_r;
     for (const auto& pt : points) {
       const double dd = -wall.signedDistance(pt);
-      if (dd < p.face_tolerance || dd > 0.6 || pt.z() < floor_z + 0.25 || pt.z() > floor_z + 1.75) continue;
+      if (dd < tol || dd > 0.6 || pt.z() < floor_z + 0.25 || pt.z() > floor_z + 1.75) continue;
       const double a = wall.along(pt);
       if (std::abs(a - d.s0) < 0.03) depth_l.push_back(dd);
       if (std::abs(a - d.s1) < 0.03) depth_r.push_back(dd);
     }
-    d.thickness = std::max(thicknessFrom(depth_l, p.face_tolerance), thicknessFrom(depth_r, p.face_tolerance));
+    d.thickness = std::max(thicknessFrom(depth_l, tol), thicknessFrom(depth_r, tol));
   }
   return out;
 }

@@ -6,6 +6,16 @@ namespace {
 
 nlohmann::json vec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
+// A camera sees a door when the middle of its doorway, 1 m above the floor,
+// projects into the image within range; a laser scanner sees every door.
+bool inView(const SimulatedCloud& c, const Eigen::Vector3d& p_sensor) {
+  if (c.sensor != "rgbd") return true;
+  const RgbdOptions& o = c.rgbd;
+  if (p_sensor.z() < o.min_range || p_sensor.z() > o.max_range) return false;
+  const double u = o.fx * p_sensor.x() / p_sensor.z() + o.cx, v = o.fy * p_sensor.y() / p_sensor.z() + o.cy;
+  return u >= 0 && u < o.width && v >= 0 && v < o.height;
+}
+
 }  // namespace
 
 nlohmann::json groundTruthJson(const Scene& scene, const SimulatedCloud& cloud) {
@@ -39,6 +49,7 @@ nlohmann::json groundTruthJson(const Scene& scene, const SimulatedCloud& cloud) 
     door["recess"] = d.recess;
     door["wall"] = d.wall;
     door["wall_normal"] = vec(R * d.wall_normal);
+    door["in_view"] = inView(cloud, W2S * (d.opening_center + Eigen::Vector3d(0, 0, 1.0)));
     nlohmann::json corners = nlohmann::json::array();
     for (const auto& c : d.leaf_corners) corners.push_back(vec(W2S * c));
     door["leaf_corners"] = corners;

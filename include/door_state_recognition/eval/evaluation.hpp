@@ -41,8 +41,10 @@ struct EvalResult {
 // Throws std::invalid_argument (message names the document and field, e.g.
 // "report.doors[1].hinge: ...") when a needed field is missing or mistyped, or
 // when max_center_distance_m is negative or not finite.
+// With in_view_only, truth doors marked "in_view": false (outside a camera's
+// view) are left out: neither missed, nor a false positive when reported.
 EvalResult evaluate(const nlohmann::json& truth, const nlohmann::json& report,
-                    double max_center_distance_m = 0.5);
+                    double max_center_distance_m = 0.5, bool in_view_only = false);
 
 // Counts, the six figures (NaN -> null), matches, missed_truth, unmatched_report.
 nlohmann::json toJson(const EvalResult& result);
