@@ -14,11 +14,13 @@ namespace {
 // documentation can't drift apart.
 struct Field {
   std::function<void(Parameters&, const YAML::Node&)> read;
+  std::function<void(const Parameters&, YAML::Emitter&)> write;
 };
 
 template <typename T>
 Field field(T Parameters::*member) {
-  return {[member](Parameters& p, const YAML::Node& n) { p.*member = n.as<T>(); }};
+  return {[member](Parameters& p, const YAML::Node& n) { p.*member = n.as<T>(); },
+          [member](const Parameters& p, YAML::Emitter& e) { e << p.*member; }};
 }
 
 const std::map<std::string, Field>& fields() {
@@ -116,6 +118,18 @@ void Parameters::validate() const {
   check(in(closed_below_deg, 0, 90) && in(open_from_deg, closed_below_deg, 180), "closed_below_deg/open_from_deg",
         "0 <= closed_below <= open_from <= 180 deg");
   check(in(reconstruction_spacing, 0.002, 1.0), "reconstruction_spacing", "in [0.002, 1] m");
+}
+
+std::string dumpParameters(const Parameters& p) {
+  YAML::Emitter e;
+  e.SetDoublePrecision(10);
+  e << YAML::BeginMap;
+  for (const auto& kv : fields()) {
+    e << YAML::Key << kv.first << YAML::Value;
+    kv.second.write(p, e);
+  }
+  e << YAML::EndMap;
+  return e.c_str();
 }
 
 Parameters loadParameters(const std::string& path, Parameters p) {

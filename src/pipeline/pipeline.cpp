@@ -192,7 +192,8 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
       door.wall_id = static_cast<int>(wi);
       door.opening_angle_deg = leaf.angle_deg;
       door.state = state::classify(leaf.angle_deg, p);
-      door.confidence = std::min(1.0, leaf.coverage) * (d.casing ? 1.0 : 0.85);
+      // Confidence: how much of the leaf was seen, and how sure the doorway is.
+      door.confidence = std::min(1.0, leaf.coverage) * (d.casing || d.through >= 0.4 ? 1.0 : 0.7);
       door.swing = leaf.toward_viewer ? Swing::TowardViewer : Swing::AwayFromViewer;
       const Eigen::Vector2d n2 = leaf.toward_viewer ? wall.normal : Eigen::Vector2d(-wall.normal);
       door.wall_normal = toInput(Eigen::Vector3d(n2.x(), n2.y(), 0));
@@ -211,10 +212,14 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
       door.wall_line_direction = toInput(Eigen::Vector3d(wall.direction.x(), wall.direction.y(), 0));
       door.leaf_line_point = door.hinge;
       door.leaf_line_direction = toInput(Eigen::Vector3d(leaf.direction.x(), leaf.direction.y(), 0));
-      // The same doorway found from two overlapping wall hypotheses: keep the surer one.
+      // The same doorway found from two overlapping wall hypotheses, or the
+      // same leaf claimed by two doorways (a leaf's shadow beside its own
+      // doorway looks like one): keep the surer one.
       bool duplicate = false;
       for (DoorResult& other : res.doors)
-        if ((other.opening_center - door.opening_center).norm() < 0.4) {
+        if ((other.opening_center - door.opening_center).norm() < 0.4 ||
+            ((other.hinge - door.hinge).norm() < 0.2 &&
+             std::abs(other.leaf_line_direction.dot(door.leaf_line_direction)) > 0.95)) {
           duplicate = true;
           if (door.confidence > other.confidence) other = door;
         }

@@ -232,13 +232,15 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   auto hasHead = [&](double a, double b) {
     const int c0 = std::max(0, static_cast<int>((a - s_lo) / cell)), c1 = std::min(cols - 1, static_cast<int>((b - s_lo) / cell));
     for (int r = body1; r < rows; ++r) {
-      int f = 0, o = 0;
+      int f = 0, o = 0, covered = 0;
       for (int c = c0; c <= c1; ++c) {
         const Cell& g = grid[static_cast<std::size_t>(r) * cols + c];
         f += g.face;
         o += g.out;
+        covered += g.face > 0;
       }
-      if (f >= 5 && o >= 0.7 * f) return true;
+      // Trim across most of the doorway, not a few trim points at its edge.
+      if (f >= 5 && o >= 0.7 * f && covered >= 0.6 * (c1 - c0 + 1)) return true;
     }
     return false;
   };

@@ -429,6 +429,7 @@ RoomSpec paperRoom(const std::string& name) {
     f.depth = 0.45;
     f.height = 0.82;
     r.furniture.push_back(f);
+    r.scanner = Eigen::Vector3d(0.3, -0.5, 1.4);
   } else if (name == "paper_house") {  // wall 2.83 m, door 2.16 m open at ~110 deg
     r.width = 6.0;
     r.depth = 5.0;
@@ -442,6 +443,7 @@ RoomSpec paperRoom(const std::string& name) {
     d.angle_deg = 110.6;
     d.swing_into_room = true;
     r.doors.push_back(d);
+    r.scanner = Eigen::Vector3d(0.5, 1.8, 1.5);
   } else if (name == "paper_multidoor") {  // wall 2.83 m, doors 2.31 m at ~7 and ~25 deg
     r.width = 7.0;
     r.depth = 5.0;
@@ -460,6 +462,7 @@ RoomSpec paperRoom(const std::string& name) {
     b.angle_deg = 25.3;
     b.hinge_left = false;
     r.doors.push_back(b);
+    r.scanner = Eigen::Vector3d(0.0, 0.8, 1.5);
   } else {
     throw std::invalid_argument("unknown paper scene '" + name + "' (known: paper_livingroom, paper_house, paper_multidoor)");
   }

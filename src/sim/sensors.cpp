@@ -114,7 +114,8 @@ SimulatedCloud scanTls(const Scene& scene, const TlsOptions& o) {
   out.frame_id = "tls_scanner";
   RayRandom placement(o.seed, 0xF00D, 0);
   for (int v = 0; v < o.viewpoints; ++v)
-    out.viewpoints_world.push_back(freePoint(scene, placement, 0.6, 1.2, 1.7));
+    out.viewpoints_world.push_back(v == 0 && scene.spec.scanner ? Eigen::Vector3d(scene.room_to_world * *scene.spec.scanner)
+                                                                 : freePoint(scene, placement, 0.6, 1.2, 1.7));
   // The scanner's frame: at the first viewpoint, z up, yawed arbitrarily.
   out.sensor_to_world = Eigen::Translation3d(out.viewpoints_world[0]) *
                         Eigen::AngleAxisd(2 * kPi * placement.uniform(), Eigen::Vector3d::UnitZ());

@@ -45,13 +45,19 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   const double zbin = 0.1, abin = 0.05;
   const int nz = std::max(1, static_cast<int>((z1 - z0) / zbin));
   const double sc = (door.s0 + door.s1) / 2, reach = w + 0.25;
+  // A leaf may be longer than the doorway seen (a leaf ajar hides its own
+  // doorway): hypotheses reach up to the widest door from either jamb.
+  const double Lmax = std::max(L, p.door_max_width), reach_h = Lmax + 0.15;
+  auto nearJamb = [&](double s, double d) {
+    return std::hypot(s - door.s0, d + t / 2) <= reach_h || std::hypot(s - door.s1, d + t / 2) <= reach_h;
+  };
 
   std::vector<Local> pts, band;
   for (std::size_t i = 0; i < points.size(); ++i) {
     const auto& q = points[i];
     if (q.z() < z0 || q.z() >= z1) continue;
     const double s = wall.along(q), d = wall.signedDistance(q);
-    if (std::hypot(s - sc, d + t / 2) > reach) continue;
+    if (!nearJamb(s, d)) continue;
     const int zb = std::min(nz - 1, static_cast<int>((q.z() - z0) / zbin));
     const bool inside = s > door.s0 + 0.03 && s < door.s1 - 0.03;
     const bool in_wall_band = d > -t - 0.03 && d < p.face_tolerance + 0.01;
@@ -76,7 +82,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     const double len2 = r.squaredNorm();
     if (len2 < 1e-6) continue;
     const double lam = std::clamp((dc - vsd).dot(r) / len2, 0.0, 1.0);
-    if ((vsd + lam * r - dc).norm() > reach) continue;
+    if ((vsd + lam * r - dc).norm() > reach + Lmax) continue;
     rays.push_back({vsd, qsd, viewpoint.z(), q.z(), std::sqrt(len2)});
   }
 
@@ -84,60 +90,92 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   // leaf holding points (support) against cells rays went through (contradiction).
   const int na = std::max(1, static_cast<int>(std::ceil(L / abin)));
   const double expected = static_cast<double>(na) * nz;
-  double best = -1e9;
-  int best_h = 0, best_sw = 0, best_deg = 0, best_support = 0;
-  // Hinge depth: on the face of its swing side, or set back by a recess.
-  const double recess_steps[3] = {0.0, 0.04, 0.08};
-  int contra_table[2][2][181];
-  for (auto& a : contra_table)
-    for (auto& b : a)
-      for (int& c : b) c = 1 << 20;
-  double best_recess = 0;
-  int best_contra = 0;
-  std::vector<char> seen(static_cast<std::size_t>(na) * nz), blocked(seen.size());
+  const int na_max = std::max(na, static_cast<int>(std::ceil(Lmax / abin)));
+  const int na_min = std::min(na, std::max(1, static_cast<int>(std::floor((p.door_min_width - 0.05) / abin))));
+  std::vector<char> seen(static_cast<std::size_t>(na_max) * nz), blocked(seen.size());
+  std::vector<int> sup(na_max), con(na_max);
+  struct Score {
+    double score = -1e9;
+    int cells = 0, contra = 0, bins = 0;
+  };
+  // One hypothesis: hinge at (s_h, d_h), closed direction e0 along the wall,
+  // swing side m, angle th. Support (cells holding points) against
+  // contradiction (cells rays went through), with the best leaf length: the
+  // shortest reaching the largest sum of support minus twice contradiction.
+  auto evaluate = [&](double s_h, double d_h, double e0, double m, double th) {
+    const Eigen::Vector2d H(s_h, d_h);
+    const Eigen::Vector2d e(std::cos(th) * e0, std::sin(th) * m), k(std::sin(th) * e0, -std::cos(th) * m);
+    std::fill(seen.begin(), seen.end(), 0);
+    std::fill(blocked.begin(), blocked.end(), 0);
+    std::fill(sup.begin(), sup.end(), 0);
+    std::fill(con.begin(), con.end(), 0);
+    for (const Local& q : pts) {
+      const Eigen::Vector2d r(q.s - s_h, q.d - d_h);
+      const double a = r.dot(e), b = r.dot(k);
+      if (a < 0.02 || a >= Lmax || b < -tol || b > lt + tol) continue;
+      const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
+      char& f = seen[static_cast<std::size_t>(ab) * nz + q.zbin];
+      if (!f) f = 1, ++sup[ab];
+    }
+    const Eigen::Vector2d P = H + k * (lt / 2);  // the leaf's mid-plane
+    for (const Ray& ray : rays) {
+      const Eigen::Vector2d r = ray.q - ray.v;
+      const double denom = r.x() * e.y() - r.y() * e.x();
+      if (std::abs(denom) < 1e-9) continue;
+      const Eigen::Vector2d w0 = P - ray.v;
+      const double lam = (w0.x() * e.y() - w0.y() * e.x()) / denom;
+      const double a = (w0.x() * r.y() - w0.y() * r.x()) / denom;
+      if (a < 0.05 || a >= Lmax || lam <= 0 || lam > 1 - 0.06 / ray.len) continue;
+      const double z = ray.vz + lam * (ray.qz - ray.vz);
+      if (z < z0 || z >= z1) continue;
+      const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
+      char& f = blocked[static_cast<std::size_t>(ab) * nz + std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
+      if (!f) f = 1, ++con[ab];
+    }
+    Score out;
+    int acc = 0, cells = 0, contra = 0;
+    for (int i = 0; i < na_max; ++i) {
+      acc += sup[i] - 2 * con[i];
+      cells += sup[i];
+      contra += con[i];
+      if (i + 1 >= na_min && acc > out.score) out = {static_cast<double>(acc), cells, contra, i + 1};
+    }
+    return out;
+  };
+
+  // Global search: hinge at either jamb, either swing side, hinge on the
+  // face or set back (recess), every degree.
+  std::vector<double> recess_steps;
+  for (double r = 0.0; r + lt <= t + 1e-9 && recess_steps.size() < 7; r += 0.04) recess_steps.push_back(r);
+  Score best;
+  int best_h = 0, best_sw = 0;
+  double best_deg = 0, best_recess = 0, best_s = door.s0;
   for (int h = 0; h < 2; ++h)
     for (int sw = 0; sw < 2; ++sw)
-    for (double rec : recess_steps) {
-      if (rec > 0 && rec + lt > t) continue;
-      const double s_h = h == 0 ? door.s0 : door.s1, e0 = h == 0 ? 1.0 : -1.0;
-      const double m = sw == 0 ? 1.0 : -1.0, d_h = sw == 0 ? -rec : -t + rec;
-      const Eigen::Vector2d H(s_h, d_h);
-      for (int deg = 0; deg <= 180; ++deg) {
-        const double th = deg * M_PI / 180, c = std::cos(th), sn = std::sin(th);
-        // e = c*e0*u + sn*m*n ; k = sn*e0*u - c*m*n
-        const Eigen::Vector2d e(c * e0, sn * m), k(sn * e0, -c * m);
-        std::fill(seen.begin(), seen.end(), 0);
-        std::fill(blocked.begin(), blocked.end(), 0);
-        int cells = 0, contra = 0;
-        for (const Local& q : pts) {
-          const Eigen::Vector2d r(q.s - s_h, q.d - d_h);
-          const double a = r.dot(e), b = r.dot(k);
-          if (a < 0.02 || a > L || b < -tol || b > lt + tol) continue;
-          char& f = seen[static_cast<std::size_t>(std::min(na - 1, static_cast<int>(a / abin))) * nz + q.zbin];
-          if (!f) f = 1, ++cells;
+      for (double rec : recess_steps) {
+        if (rec > 0 && rec + lt > t) continue;
+        const double s_h = h == 0 ? door.s0 : door.s1, e0 = h == 0 ? 1.0 : -1.0;
+        const double m = sw == 0 ? 1.0 : -1.0, d_h = sw == 0 ? -rec : -t + rec;
+        for (int deg = 0; deg <= 180; ++deg) {
+          const Score sc = evaluate(s_h, d_h, e0, m, deg * M_PI / 180);
+          if (sc.score > best.score) best = sc, best_h = h, best_sw = sw, best_deg = deg, best_recess = rec, best_s = s_h;
         }
-        // The leaf's mid-plane segment, shifted to its middle of thickness.
-        const Eigen::Vector2d P = H + k * (lt / 2);
-        for (const Ray& ray : rays) {
-          const Eigen::Vector2d r = ray.q - ray.v;
-          const double denom = r.x() * e.y() - r.y() * e.x();
-          if (std::abs(denom) < 1e-9) continue;
-          const Eigen::Vector2d w0 = P - ray.v;
-          const double lam = (w0.x() * e.y() - w0.y() * e.x()) / denom;
-          const double a = (w0.x() * r.y() - w0.y() * r.x()) / denom;
-          if (a < 0.05 || a > L - 0.05 || lam <= 0 || lam > 1 - 0.06 / ray.len) continue;
-          const double z = ray.vz + lam * (ray.qz - ray.vz);
-          if (z < z0 || z >= z1) continue;
-          char& f = blocked[static_cast<std::size_t>(std::min(na - 1, static_cast<int>(a / abin))) * nz +
-                            std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
-          if (!f) f = 1, ++contra;
-        }
-        contra_table[h][sw][deg] = std::min(contra_table[h][sw][deg], contra);
-        const double score = cells - 2.0 * contra;
-        if (score > best) best = score, best_h = h, best_sw = sw, best_deg = deg, best_support = cells, best_recess = rec, best_contra = contra;
       }
-    }
-  (void)contra_table;
+  // Local search: the jamb seen from the wall can be off where a leaf hides
+  // or shadows its own doorway; move the hinge along the wall and the angle.
+  {
+    const double e0 = best_h == 0 ? 1.0 : -1.0, m = best_sw == 0 ? 1.0 : -1.0;
+    const double d_h = best_sw == 0 ? -best_recess : -t + best_recess;
+    const double s_center = best_s, deg_center = best_deg;
+    for (int ds = -15; ds <= 15; ++ds)
+      for (int dd = -10; dd <= 10; ++dd) {
+        const double deg = deg_center + dd * 0.5;
+        if (deg < 0 || deg > 180) continue;
+        const Score sc = evaluate(s_center + ds * 0.02, d_h, e0, m, deg * M_PI / 180);
+        if (sc.score > best.score) best = sc, best_deg = deg, best_s = s_center + ds * 0.02;
+      }
+  }
+  const int best_support = best.cells, best_contra = best.contra, best_bins = best.bins;
 
   // A closed leaf anywhere inside the wall's thickness (flush or recessed).
   std::set<std::pair<int, int>> band_cells;
@@ -149,19 +187,28 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   const double band_cov = std::min(1.0, band_cells.size() / expected);
   double band_angle = 0;
   if (band_xy.size() >= 10) {
-    const Line2 l = fitLine(band_xy);
+    // Only the points at the leaf's own depth: not jambs, trim or what lies beyond.
+    std::vector<double> dv;
+    for (const auto& q : band_xy) dv.push_back(q.y());
+    std::nth_element(dv.begin(), dv.begin() + dv.size() / 2, dv.end());
+    const double dmed = dv[dv.size() / 2];
+    std::vector<Eigen::Vector2d> leaf_xy;
+    for (const auto& q : band_xy)
+      if (std::abs(q.y() - dmed) < std::max(0.03, lt)) leaf_xy.push_back(q);
+    const Line2 l = fitLine(leaf_xy.size() >= 10 ? leaf_xy : band_xy);
     band_angle = std::acos(std::min(1.0, std::abs(l.direction.x()))) * 180 / M_PI;
   }
 
-  const double gen_cov = best_support / expected;
-  const double gen_contra = best_contra / expected;
+  const double best_expected = static_cast<double>(best_bins) * nz;
+  const double gen_cov = best_support / best_expected;
+  const double gen_contra = best_contra / best_expected;
   fit.best_angle_deg = best_deg;
   fit.best_coverage = gen_cov;
   fit.best_contradiction = gen_contra;
   fit.length = L;
   fit.hinge_at_s0 = best_h == 0;
   fit.toward_viewer = best_sw == 0;
-  double s_h = best_h == 0 ? door.s0 : door.s1;
+  double s_h = best_s;
   const double s_other = best_h == 0 ? door.s1 : door.s0, e0 = best_h == 0 ? 1.0 : -1.0;
   const double m = best_sw == 0 ? 1.0 : -1.0, d_h = best_sw == 0 ? -best_recess : -t + best_recess;
   auto toXY = [&](double s, double d) { return wall.point + s * wall.direction + d * wall.normal; };
@@ -203,7 +250,8 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     // Refine: a TLS line through the inliers gives the angle; where it meets
     // the wall face on the swing side is the hinge (the doorway's edge seen
     // from the wall can be off where the leaf shadows the wall).
-    double angle = best_deg, len = L;
+    double angle = best_deg;
+    const double len = best_bins * abin;
     for (int iter = 0; iter < 3; ++iter) {
       std::vector<Eigen::Vector2d> xy;
       support(s_h, angle, len + 0.1, -0.05, lt + 0.05, nullptr, &xy);
@@ -215,7 +263,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       const double refined = std::atan2(l.direction.y() * m, l.direction.x() * e0) * 180 / M_PI;
       if (std::abs(refined - angle) > 8) break;  // the fit wandered off: keep the search's answer
       angle = std::clamp(refined, 0.0, 180.0);
-      if (angle > 12 && angle < 168) {
+      if (angle > 25 && angle < 155) {
         // The visible face is the one towards the sensor; the hinge line is
         // the swing face: shift the fitted line by the thickness if needed.
         const Eigen::Vector2d kk(std::sin(angle * M_PI / 180) * e0, -std::cos(angle * M_PI / 180) * m);
@@ -225,8 +273,13 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
         const double s_new = on.x() + lam * l.direction.x();
         if (std::abs(s_new - s_h) < 0.2) s_h = s_new;
       }
-      const double new_len = std::abs(s_other - s_h) - 0.008;
-      if (new_len > p.door_min_width - 0.15 && new_len < p.door_max_width + 0.15) len = new_len;
+    }
+    // Keep the refinement only if the leaf it describes is as well supported.
+    const double search_s_h = best_s;
+    const double cov_search = support(search_s_h, best_deg, len, -tol, lt + tol, nullptr, nullptr);
+    if (support(s_h, angle, len, -tol, lt + tol, nullptr, nullptr) < 0.9 * cov_search) {
+      s_h = search_s_h;
+      angle = best_deg;
     }
     std::vector<int> inl;
     const double cov = support(s_h, angle, len, -tol, lt + tol, &inl, nullptr);
@@ -242,7 +295,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     }
   }
   fit.s_hinge = s_h;
-  fit.s_latch = s_other;
+  fit.s_latch = fit.closed_in_band ? s_other : s_h + e0 * (fit.length + 0.008);
   if (!fit.found) return fit;
   const double th = fit.angle_deg * M_PI / 180;
   const Eigen::Vector2d dir_sd(std::cos(th) * e0, std::sin(th) * m);

@@ -65,4 +65,7 @@ struct Parameters {
 // the defaults. Throws std::invalid_argument with the file and the key.
 Parameters loadParameters(const std::string& yaml_path, Parameters base = Parameters());
 
+// Every parameter as YAML `name: value`, sorted by name.
+std::string dumpParameters(const Parameters& p);
+
 }  // namespace dsr

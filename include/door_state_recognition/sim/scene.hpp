@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -69,6 +70,9 @@ struct RoomSpec {
   double adjacent_depth = 3.0;  // depth of the room behind a wall with a door
   std::vector<DoorSpec> doors;
   std::vector<FurnitureSpec> furniture;
+  // Where the laser scanner stands (room frame, z above the floor); unset:
+  // drawn by the seed among the free positions.
+  std::optional<Eigen::Vector3d> scanner;
 };
 
 struct DoorTruth {
