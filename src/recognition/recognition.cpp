@@ -200,15 +200,15 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   std::vector<Doorway> out;
   auto addCandidate = [&](double s0, double s1, bool casing) {
     if (s1 - s0 < p.door_min_width - 0.1 || s1 - s0 > p.door_max_width + 0.1) return;
-    for (Doorway& d : out)  // merge with an overlapping candidate, casing edges win
+    for (Doorway& d : out)  // merge with an overlapping candidate, the edges of paired legs win
       if (s0 < d.s1 && d.s0 < s1) {
-        if (casing && !d.casing) d.s0 = s0, d.s1 = s1, d.casing = true;
+        if (casing && !d.paired) d.s0 = s0, d.s1 = s1, d.casing = d.paired = true;
         return;
       }
     Doorway d;
     d.s0 = s0;
     d.s1 = s1;
-    d.casing = casing;
+    d.casing = d.paired = casing;
     out.push_back(d);
   };
 

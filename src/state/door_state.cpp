@@ -47,7 +47,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   const double sc = (door.s0 + door.s1) / 2, reach = w + 0.25;
   // A leaf may be longer than the doorway seen (a leaf ajar hides its own
   // doorway): hypotheses reach up to the widest door from either jamb.
-  const double Lmax = std::max(L, p.door_max_width), reach_h = Lmax + 0.15;
+  const double Lmax = door.paired ? L + 0.05 : std::max(L, p.door_max_width), reach_h = Lmax + 0.15;
   auto nearJamb = [&](double s, double d) {
     return std::hypot(s - door.s0, d + t / 2) <= reach_h || std::hypot(s - door.s1, d + t / 2) <= reach_h;
   };
@@ -91,7 +91,9 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   const int na = std::max(1, static_cast<int>(std::ceil(L / abin)));
   const double expected = static_cast<double>(na) * nz;
   const int na_max = std::max(na, static_cast<int>(std::ceil(Lmax / abin)));
-  const int na_min = std::min(na, std::max(1, static_cast<int>(std::floor((p.door_min_width - 0.05) / abin))));
+  // With both trim legs seen the leaf spans the doorway; otherwise its length is sought.
+  const int na_min = door.paired ? std::max(1, na - 1)
+                                 : std::min(na, std::max(1, static_cast<int>(std::floor((p.door_min_width - 0.05) / abin))));
   std::vector<char> seen(static_cast<std::size_t>(na_max) * nz), blocked(seen.size());
   std::vector<int> sup(na_max), con(na_max);
   struct Score {
@@ -167,7 +169,8 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     const double e0 = best_h == 0 ? 1.0 : -1.0, m = best_sw == 0 ? 1.0 : -1.0;
     const double d_h = best_sw == 0 ? -best_recess : -t + best_recess;
     const double s_center = best_s, deg_center = best_deg;
-    for (int ds = -15; ds <= 15; ++ds)
+    const int reach_steps = door.paired ? 3 : 15;  // 2 cm steps
+    for (int ds = -reach_steps; ds <= reach_steps; ++ds)
       for (int dd = -10; dd <= 10; ++dd) {
         const double deg = deg_center + dd * 0.5;
         if (deg < 0 || deg > 180) continue;
@@ -246,6 +249,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     fit.toward_viewer = -fit.face_d < (t - lt) / 2;
     fit.coverage = band_cov;
     for (const Local& q : band) fit.inliers.push_back(q.index);
+    s_h = best_h == 0 ? door.s0 : door.s1;  // a closed leaf fills its doorway from jamb to jamb
   } else if (gen_cov >= 0.1 && gen_contra < 0.1) {
     // Refine: a TLS line through the inliers gives the angle; where it meets
     // the wall face on the swing side is the hinge (the doorway's edge seen

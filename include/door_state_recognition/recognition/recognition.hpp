@@ -38,7 +38,8 @@ std::vector<char> boundaryPoints(const Points& points, const segmentation::Norma
 struct Doorway {
   double s0 = 0, s1 = 0;   // jambs along the wall (WallPlane::along)
   double top = 0;          // z of the head of the opening (estimate)
-  bool casing = false;     // trim legs found on both sides
+  bool casing = false;     // trim found: legs on both sides, or one leg and the head
+  bool paired = false;     // both legs found: the jambs s0, s1 are exact
   double face = 0, through = 0, front = 0, recess = 0;  // shares of body cells, see findDoorways
   double thickness = 0;    // wall thickness seen at the jambs (0: unknown)
   double width() const { return s1 - s0; }
