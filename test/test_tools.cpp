@@ -3,6 +3,7 @@
 // is deterministic across runs.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -20,8 +21,8 @@ struct Result {
   std::string out;
 };
 
-Result run(const std::string& args) {
-  const std::string cmd = std::string(DSR_BIN_DIR) + "/" + args + " 2>/dev/null";
+Result run(const std::string& args, bool stderr_only = false) {
+  const std::string cmd = std::string(DSR_BIN_DIR) + "/" + args + (stderr_only ? " 2>&1 >/dev/null" : " 2>/dev/null");
   FILE* p = popen(cmd.c_str(), "r");
   if (!p) return {-1, ""};
   std::string out;
@@ -47,7 +48,7 @@ fs::path tempDir(const std::string& name) {
 }  // namespace
 
 TEST(Tools, HelpExitsZeroAndWrongArgumentsExitTwo) {
-  for (const std::string exe : {"door_scene_sim", "door_state_eval"}) {
+  for (const std::string exe : {"door_scene_sim", "door_state_eval", "door_state_cli"}) {
     SCOPED_TRACE(exe);
     const Result help = run(exe + " --help");
     EXPECT_EQ(help.code, 0);
@@ -60,6 +61,9 @@ TEST(Tools, HelpExitsZeroAndWrongArgumentsExitTwo) {
   EXPECT_EQ(run("door_scene_sim --out /tmp/x --scene atlantis").code, 2);     // unknown scene
   EXPECT_EQ(run("door_scene_sim --out /tmp/x --angle 270").code, 2);          // out of range
   EXPECT_EQ(run("door_state_eval only_one.json").code, 2);
+  EXPECT_EQ(run("door_state_cli").code, 2);                                   // no INPUT
+  EXPECT_EQ(run("door_state_cli a.pcd b.pcd").code, 2);                       // two INPUTs
+  EXPECT_EQ(run("door_state_cli --up sideways x.pcd").code, 2);               // bad axis
   EXPECT_EQ(run("door_state_eval /nonexistent/a.json /nonexistent/b.json").code, 2);
 }
 
@@ -84,5 +88,50 @@ TEST(Tools, SimulatorWritesCloudTruthAndBagDeterministically) {
   EXPECT_DOUBLE_EQ(score["precision"].get<double>(), 1.0);
   EXPECT_DOUBLE_EQ(score["recall"].get<double>(), 1.0);
   EXPECT_DOUBLE_EQ(score["state_accuracy"].get<double>(), 1.0);
+  fs::remove_all(dir);
+}
+
+TEST(Tools, CliRefusesMalformedFilesWithOneLineAndExitTwo) {
+  const fs::path dir = tempDir("cli_bad");
+  std::ofstream(dir / "text.pcd") << "this is not a point cloud\n";
+  std::ofstream(dir / "empty.ply");
+  std::ofstream(dir / "lying.pcd") << "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+                                      "WIDTH 1000\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1000\nDATA binary\n"
+                                   << std::string(100, '\0');
+  std::ofstream(dir / "bad.yaml") << "voxel_size: -1\n";
+  for (const std::string f : {"text.pcd", "empty.ply", "lying.pcd", "missing.pcd"}) {
+    SCOPED_TRACE(f);
+    const Result r = run("door_state_cli " + (dir / f).string(), true);
+    EXPECT_EQ(r.code, 2);
+    EXPECT_FALSE(r.out.empty());
+    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;  // one line on stderr
+  }
+  ASSERT_EQ(run("door_scene_sim --quiet --seed 3 --points 50000 --out " + (dir / "ok").string()).code, 0);
+  const Result bad_config = run("door_state_cli --config " + (dir / "bad.yaml").string() + " " + (dir / "ok.pcd").string(), true);
+  EXPECT_EQ(bad_config.code, 2);
+  EXPECT_NE(bad_config.out.find("voxel_size"), std::string::npos) << bad_config.out;
+  fs::remove_all(dir);
+}
+
+TEST(Tools, CliReportHasTheDocumentedShape) {
+  const fs::path dir = tempDir("cli_ok");
+  ASSERT_EQ(run("door_scene_sim --quiet --seed 8 --points 200000 --out " + (dir / "s").string()).code, 0);
+  const Result r = run("door_state_cli --quiet --reconstruction " + (dir / "rec.ply").string() + " " + (dir / "s.pcd").string());
+  ASSERT_EQ(r.code, 0);
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  for (const char* k : {"input", "points_in", "points_used", "up", "floor", "ceiling", "walls", "doors", "others", "timing_ms"})
+    EXPECT_TRUE(j.contains(k)) << k;
+  EXPECT_EQ(j["points_in"].get<int>() > 0, true);
+  ASSERT_FALSE(j["walls"].empty());
+  EXPECT_EQ(j["walls"][0]["corners"].size(), 8u);
+  for (const auto& d : j["doors"]) {
+    EXPECT_EQ(d["leaf_corners"].size(), 4u);
+    const std::string st = d["state"];
+    EXPECT_TRUE(st == "closed" || st == "semi_open" || st == "open");
+    EXPECT_GE(d["confidence"].get<double>(), 0.0);
+    EXPECT_LE(d["confidence"].get<double>(), 1.0);
+  }
+  EXPECT_TRUE(j["timing_ms"].contains("total"));
+  EXPECT_GT(fs::file_size(dir / "rec.ply"), 1000u);
   fs::remove_all(dir);
 }

@@ -156,12 +156,13 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
       const double t = d.thickness > 0.04 ? d.thickness : p.default_wall_thickness;
       const state::LeafFit leaf = state::fitLeaf(pts, wall, d, floor_z, t, viewpoint, p);
       if (!leaf.found) {
-        char buf[300];
+        char buf[400];
         std::snprintf(buf, sizeof buf,
-                      "wall %zu: doorway s=[%.2f, %.2f] casing=%d through=%.2f front=%.2f recess=%.2f | no leaf "
-                      "(best: %.0f deg, coverage %.2f, contradicted %.2f)",
-                      wi, d.s0, d.s1, d.casing, d.through, d.front, d.recess, leaf.best_angle_deg, leaf.best_coverage,
-                      leaf.best_contradiction);
+                      "wall %zu: doorway s=[%.2f, %.2f] casing=%d through=%.2f front=%.2f recess=%.2f top=%.2f "
+                      "thick=%.2f | no leaf (best: %.0f deg, coverage %.2f, contradicted %.2f; %d points, %d rays)",
+                      wi, d.s0, d.s1, d.casing, d.through, d.front, d.recess, d.top - floor_z, d.thickness,
+                      leaf.best_angle_deg, leaf.best_coverage, leaf.best_contradiction, leaf.candidate_points,
+                      leaf.candidate_rays);
         res.trace.push_back(buf);
         continue;
       }

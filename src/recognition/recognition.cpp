@@ -226,7 +226,8 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     int e = c;
     while (e + 1 < sub && casing_share[e + 1] >= 0.6) ++e;
     const double w = (e - c + 1) * half;
-    if (w <= 0.2) legs.push_back({c, e});
+    // Trim is a hand wide; a leaf just ajar stands out as little over a wider run.
+    if (w <= 0.13) legs.push_back({c, e});
     c = e + 1;
   }
   auto hasHead = [&](double a, double b) {
@@ -287,12 +288,41 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   // Shares, head and thickness of every candidate.
   for (Doorway& d : out) {
     // An opening with a trim leg at one of its edges and a head above: the
-    // other leg may hide behind a leaf swung towards the sensor.
+    // other leg may hide behind a leaf swung towards the sensor, and a leaf
+    // ajar hides its own doorway near the hinge; the head spans the doorway
+    // from leg to leg, so the doorway is snapped to it.
     if (!d.casing)
       for (const auto& leg : legs) {
         const double inner_right = subS(leg.second + 1), inner_left = subS(leg.first);
         if ((std::abs(inner_right - d.s0) < 0.12 || std::abs(inner_left - d.s1) < 0.12) && hasHead(d.s0, d.s1)) {
           d.casing = true;
+          const double leg_w = std::max(half, (leg.second - leg.first + 1) * half);
+          // The head row: the row above the body with the most trim cells.
+          int best_r = -1, best_n = 0;
+          const int cm = static_cast<int>(((d.s0 + d.s1) / 2 - s_lo) / cell);
+          for (int r = body1; r < rows; ++r) {
+            int n = 0;
+            for (int c = std::max(0, cm - 40); c <= std::min(cols - 1, cm + 40); ++c) {
+              const Cell& g = grid[static_cast<std::size_t>(r) * cols + c];
+              n += g.face > 0 && g.out >= 0.6 * g.face;
+            }
+            if (n > best_n) best_n = n, best_r = r;
+          }
+          if (best_r >= 0) {
+            auto trim = [&](int c) {
+              const Cell& g = grid[static_cast<std::size_t>(best_r) * cols + c];
+              return g.face > 0 && g.out >= 0.6 * g.face;
+            };
+            auto unseen = [&](int c) { return grid[static_cast<std::size_t>(best_r) * cols + c].face == 0; };
+            int lo = std::clamp(cm, 0, cols - 1), hi = lo;
+            while (lo > 0 && (trim(lo - 1) || (lo > 1 && unseen(lo - 1) && trim(lo - 2)))) --lo;
+            while (hi + 1 < cols && (trim(hi + 1) || (hi + 2 < cols && unseen(hi + 1) && trim(hi + 2)))) ++hi;
+            const double a = colS(lo) + leg_w, b = colS(hi + 1) - leg_w;
+            if (b - a >= p.door_min_width - 0.1 && b - a <= p.door_max_width + 0.1 && a <= d.s0 + 0.1 && b >= d.s1 - 0.1) {
+              d.s0 = a;
+              d.s1 = b;
+            }
+          }
           break;
         }
       }

@@ -208,6 +208,8 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   fit.best_angle_deg = best_deg;
   fit.best_coverage = gen_cov;
   fit.best_contradiction = gen_contra;
+  fit.candidate_points = static_cast<int>(pts.size());
+  fit.candidate_rays = static_cast<int>(rays.size());
   fit.length = L;
   fit.hinge_at_s0 = best_h == 0;
   fit.toward_viewer = best_sw == 0;
@@ -278,12 +280,13 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
         if (std::abs(s_new - s_h) < 0.2) s_h = s_new;
       }
     }
-    // Keep the refinement only if the leaf it describes is as well supported.
+    // Keep the refinement only if the leaf it describes is as well supported:
+    // the refined hinge and angle, else the refined angle alone, else the search's.
     const double search_s_h = best_s;
     const double cov_search = support(search_s_h, best_deg, len, -tol, lt + tol, nullptr, nullptr);
     if (support(s_h, angle, len, -tol, lt + tol, nullptr, nullptr) < 0.9 * cov_search) {
       s_h = search_s_h;
-      angle = best_deg;
+      if (support(s_h, angle, len, -tol, lt + tol, nullptr, nullptr) < 0.9 * cov_search) angle = best_deg;
     }
     std::vector<int> inl;
     const double cov = support(s_h, angle, len, -tol, lt + tol, &inl, nullptr);

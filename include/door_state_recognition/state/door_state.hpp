@@ -37,6 +37,7 @@ struct LeafFit {
   double s_hinge = 0, s_latch = 0;  // the doorway's jambs along the wall, refined by the fit
   double face_d = 0;            // closed leaf: depth of its visible face (<= 0, behind the wall face)
   double best_angle_deg = 0, best_coverage = 0, best_contradiction = 0;  // best hypothesis, found or not
+  int candidate_points = 0, candidate_rays = 0;  // points near the doorway, rays passing it
   std::vector<int> inliers;
 };
 
