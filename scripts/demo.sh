@@ -28,9 +28,27 @@ for d in t["decoys"]:
     print(f"   decoy: {d['kind']} {d['height']:.2f} m tall")
 PY
 
-if [ -x "$BIN/door_state_cli" ]; then
-  echo "== running the pipeline on the scene"
-  "$BIN/door_state_cli" --json "$OUT/report.json" "$PREFIX.pcd"
-  echo "== score against the ground truth"
-  "$BIN/door_state_eval" "$PREFIX.json" "$OUT/report.json"
-fi
+echo "== running the pipeline: door_state_cli $PREFIX.pcd"
+"$BIN/door_state_cli" --json "$OUT/report.json" --reconstruction "$OUT/reconstruction.ply" "$PREFIX.pcd"
+"$BIN/door_state_eval" "$PREFIX.json" "$OUT/report.json" > "$OUT/score.json"
+echo "== doors found next to the truth (report: $OUT/report.json, walls rebuilt: $OUT/reconstruction.ply)"
+/usr/bin/python3 - "$PREFIX.json" "$OUT/report.json" "$OUT/score.json" <<'PY'
+import json, sys
+t, r, s = (json.load(open(f)) for f in sys.argv[1:4])
+by_truth = {m["truth_index"]: m for m in s["matches"]}
+print(f"   {'truth':28s} {'found':28s} angle error  hinge error")
+for i, d in enumerate(t["doors"]):
+    truth = f"{d['state']} {d['opening_angle_deg']:.1f} deg"
+    m = by_truth.get(i)
+    if m:
+        f = r["doors"][m["report_index"]]
+        found = f"{f['state']} {f['opening_angle_deg']:.1f} deg"
+        print(f"   door {i}: {truth:20s} {found:28s} {m['angle_error_deg']:6.2f} deg  {100*m['hinge_error_m']:6.1f} cm")
+    else:
+        print(f"   door {i}: {truth:20s} {'not found':28s}")
+for j in s["unmatched_report"]:
+    f = r["doors"][j]
+    print(f"   (reported, matches no door: {f['state']} {f['opening_angle_deg']:.1f} deg)")
+print(f"   precision {s['precision']:.2f}, recall {s['recall']:.2f}, state accuracy "
+      f"{s['state_accuracy'] if s['state_accuracy'] is None else round(s['state_accuracy'], 2)}")
+PY

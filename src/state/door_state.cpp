@@ -85,6 +85,13 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     if ((vsd + lam * r - dc).norm() > reach + Lmax) continue;
     rays.push_back({vsd, qsd, viewpoint.z(), q.z(), std::sqrt(len2)});
   }
+  // Enough rays to see free space at 5 cm x 10 cm cells; more only cost time.
+  if (rays.size() > 15000) {
+    const std::size_t stride = (rays.size() + 14999) / 15000;
+    std::vector<Ray> thin;
+    for (std::size_t i = 0; i < rays.size(); i += stride) thin.push_back(rays[i]);
+    rays.swap(thin);
+  }
 
   // Exhaustive search over hinge side, swing side and angle: cells of the
   // leaf holding points (support) against cells rays went through (contradiction).
@@ -148,7 +155,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   // Global search: hinge at either jamb, either swing side, hinge on the
   // face or set back (recess), every degree.
   std::vector<double> recess_steps;
-  for (double r = 0.0; r + lt <= t + 1e-9 && recess_steps.size() < 7; r += 0.04) recess_steps.push_back(r);
+  for (double r = 0.0; r + lt <= t + 1e-9 && recess_steps.size() < 4; r += 0.05) recess_steps.push_back(r);
   Score best;
   int best_h = 0, best_sw = 0;
   double best_deg = 0, best_recess = 0, best_s = door.s0;
@@ -158,7 +165,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
         if (rec > 0 && rec + lt > t) continue;
         const double s_h = h == 0 ? door.s0 : door.s1, e0 = h == 0 ? 1.0 : -1.0;
         const double m = sw == 0 ? 1.0 : -1.0, d_h = sw == 0 ? -rec : -t + rec;
-        for (int deg = 0; deg <= 180; ++deg) {
+        for (int deg = 0; deg <= 180; deg += 2) {  // refined below
           const Score sc = evaluate(s_h, d_h, e0, m, deg * M_PI / 180);
           if (sc.score > best.score) best = sc, best_h = h, best_sw = sw, best_deg = deg, best_recess = rec, best_s = s_h;
         }
@@ -171,7 +178,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     const double s_center = best_s, deg_center = best_deg;
     const int reach_steps = door.paired ? 3 : 15;  // 2 cm steps
     for (int ds = -reach_steps; ds <= reach_steps; ++ds)
-      for (int dd = -10; dd <= 10; ++dd) {
+      for (int dd = -5; dd <= 5; ++dd) {
         const double deg = deg_center + dd * 0.5;
         if (deg < 0 || deg > 180) continue;
         const Score sc = evaluate(s_center + ds * 0.02, d_h, e0, m, deg * M_PI / 180);
