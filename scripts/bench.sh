@@ -1,25 +1,39 @@
 #!/usr/bin/env bash
-# make bench: times the simulator (median of repeated runs, measured here).
-# The pipeline's benchmark joins this script when the pipeline lands.
+# make bench: wall-clock medians of the simulator and of the pipeline, per
+# stage, on simulated scenes with fixed seeds, measured side by side in one
+# run. Prints a table and writes build/bench/bench.json.
 set -euo pipefail
 REPO="$(cd "$(dirname "$0")/.." && pwd)"
 BIN="$REPO/build/bin"
 OUT="$REPO/build/bench"
 RUNS="${BENCH_RUNS:-5}"
 mkdir -p "$OUT"
-median() { sort -n | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
-now_ms() { date +%s%N | awk '{printf "%.1f", $1/1e6}'; }
-
-echo "door_scene_sim, median of $RUNS runs on $(nproc) cores ($(uname -m)); times include writing the PCD"
-printf "%-28s %10s %12s\n" case points median_ms
-for spec in "tls 100000" "tls 400000" "tls 1000000" "tls 4000000" "rgbd 307200"; do
-  set -- $spec
-  times=()
-  for r in $(seq "$RUNS"); do
-    t0=$(now_ms)
-    "$BIN/door_scene_sim" --quiet --sensor "$1" --points "$2" --seed "$r" --formats pcd --out "$OUT/bench_$1" 
-    t1=$(now_ms)
-    times+=("$(awk -v a="$t0" -v b="$t1" 'BEGIN{print b-a}')")
-  done
-  printf "%-28s %10s %12s\n" "sim $1" "$2" "$(printf '%s\n' "${times[@]}" | median)"
-done
+/usr/bin/python3 - "$BIN" "$OUT" "$RUNS" <<'PY'
+import json, os, statistics, subprocess, sys, time
+BIN, OUT, RUNS = sys.argv[1], sys.argv[2], int(sys.argv[3])
+cases = [("tls", 100000), ("tls", 400000), ("tls", 1000000), ("rgbd", 307200)]
+results = []
+print(f"median of {RUNS} runs, {os.cpu_count()} cores; seed 7 for every scene")
+print(f"{'case':16s} {'sim ms':>8s} {'pipeline ms':>12s}  per stage (ms)")
+for sensor, n in cases:
+    prefix = f"{OUT}/{sensor}_{n}"
+    sim_ms = []
+    for r in range(RUNS):
+        t0 = time.perf_counter()
+        subprocess.run([f"{BIN}/door_scene_sim", "--quiet", "--sensor", sensor, "--points", str(n), "--seed", "7",
+                        "--formats", "pcd,json", "--out", prefix], check=True)
+        sim_ms.append(1000 * (time.perf_counter() - t0))
+    stages = {}
+    up = "-y" if sensor == "rgbd" else "+z"
+    for r in range(RUNS):
+        out = subprocess.run([f"{BIN}/door_state_cli", "--quiet", "--up", up, f"{prefix}.pcd"], check=True,
+                             capture_output=True, text=True).stdout
+        for k, v in json.loads(out)["timing_ms"].items():
+            stages.setdefault(k, []).append(v)
+    med = {k: statistics.median(v) for k, v in stages.items()}
+    results.append({"sensor": sensor, "points": n, "sim_ms": statistics.median(sim_ms), "pipeline_ms": med})
+    per = " ".join(f"{k} {v:.0f}" for k, v in med.items() if k not in ("total", "read"))
+    print(f"{sensor + ' ' + str(n):16s} {statistics.median(sim_ms):8.0f} {med['total']:12.0f}  {per}")
+json.dump(results, open(f"{OUT}/bench.json", "w"), indent=1)
+print(f"wrote {OUT}/bench.json (pipeline total excludes reading the file)")
+PY

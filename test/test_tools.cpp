@@ -8,6 +8,10 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <tf2_msgs/TFMessage.h>
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
@@ -78,6 +82,29 @@ TEST(Tools, SimulatorWritesCloudTruthAndBagDeterministically) {
   }
   EXPECT_EQ(slurp(dir / "a.pcd"), slurp(dir / "b.pcd"));
   EXPECT_EQ(slurp(dir / "a.json"), slurp(dir / "b.json"));
+  // The bag reads back: the cloud on /points in the truth's frame, three
+  // copies a second apart, and the latched static tf to the fixed frame.
+  {
+    rosbag::Bag bag((dir / "a.bag").string(), rosbag::bagmode::Read);
+    int clouds = 0, tfs = 0;
+    for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
+      if (auto pc = m.instantiate<sensor_msgs::PointCloud2>()) {
+        ++clouds;
+        EXPECT_EQ(pc->header.frame_id, "tls_scanner");
+        EXPECT_EQ(m.getTopic(), "/points");
+        EXPECT_GT(pc->width * pc->height, 15000u);
+      } else if (auto tf = m.instantiate<tf2_msgs::TFMessage>()) {
+        ++tfs;
+        EXPECT_EQ(m.getTopic(), "/tf_static");
+        ASSERT_EQ(tf->transforms.size(), 1u);
+        EXPECT_EQ(tf->transforms[0].header.frame_id, "map");
+        EXPECT_EQ(tf->transforms[0].child_frame_id, "tls_scanner");
+        EXPECT_EQ(m.getConnectionHeader()->at("latching"), "1");
+      }
+    }
+    EXPECT_EQ(clouds, 3);
+    EXPECT_EQ(tfs, 1);
+  }
   const nlohmann::json truth = nlohmann::json::parse(slurp(dir / "a.json"));
   EXPECT_EQ(truth["sensor"], "tls");
   EXPECT_GE(truth["doors"].size(), 1u);

@@ -32,6 +32,11 @@ void writeBag(const std::string& path, const sim::SimulatedCloud& sim, const Bag
     tf2_msgs::TFMessage tfm;
     tfm.transforms.push_back(tf);
     auto latched = boost::make_shared<ros::M_string>();
+    // A connection header given to rosbag replaces the one it would build:
+    // it needs the message's type, md5sum and definition besides latching.
+    (*latched)["type"] = ros::message_traits::datatype<tf2_msgs::TFMessage>();
+    (*latched)["md5sum"] = ros::message_traits::md5sum<tf2_msgs::TFMessage>();
+    (*latched)["message_definition"] = ros::message_traits::definition<tf2_msgs::TFMessage>();
     (*latched)["latching"] = "1";
     (*latched)["callerid"] = "/door_scene_sim";
     bag.write("/tf_static", t0, tfm, latched);
