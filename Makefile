@@ -31,7 +31,8 @@ build: deps
 test: build
 	@rm -rf $(WS)/build/test_results
 	@cd $(WS) && source devel/setup.bash && \
-	  catkin_make -j$(JOBS) $(CATKIN_ARGS) run_tests >$(REPO)/build/run_tests.log 2>&1; \
+	  catkin_make -j$(JOBS) $(CATKIN_ARGS) tests >$(REPO)/build/run_tests.log 2>&1 || { tail -n 40 $(REPO)/build/run_tests.log; exit 1; }; \
+	  catkin_make -j1 $(CATKIN_ARGS) run_tests >>$(REPO)/build/run_tests.log 2>&1; \
 	  grep -E "^\[  (PASSED|FAILED)  \]|^\[==========\] .* ran|Failure|rostest|FAILURE" $(REPO)/build/run_tests.log | tail -n 60; \
 	  catkin_test_results build/test_results | tail -n 1; \
 	  /usr/bin/python3 $(REPO)/scripts/test_summary.py build/test_results

@@ -20,6 +20,7 @@ PKGS=(
   libdiagnostic-updater-dev
   libtf2-msgs-dev librosbag-storage-dev
   nlohmann-json3-dev libyaml-cpp-dev
+  rviz xvfb imagemagick
 )
 
 missing=()

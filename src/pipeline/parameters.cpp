@@ -76,6 +76,8 @@ bool in(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && 
 
 }  // namespace
 
+Parameters fromNode(const YAML::Node& root, Parameters p, const std::string& path);
+
 void Parameters::validate() const {
   static const char* axes[] = {"+x", "-x", "+y", "-y", "+z", "-z", "auto"};
   bool axis_ok = false;
@@ -132,6 +134,22 @@ std::string dumpParameters(const Parameters& p) {
   return e.c_str();
 }
 
+std::vector<std::string> parameterNames() {
+  std::vector<std::string> names;
+  for (const auto& kv : fields()) names.push_back(kv.first);
+  return names;
+}
+
+Parameters parseParameters(const std::string& yaml_text, Parameters base, const std::string& source) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(source + ": cannot read YAML: " + e.what());
+  }
+  return fromNode(root, base, source);
+}
+
 Parameters loadParameters(const std::string& path, Parameters p) {
   YAML::Node root;
   try {
@@ -139,6 +157,10 @@ Parameters loadParameters(const std::string& path, Parameters p) {
   } catch (const std::exception& e) {
     throw std::invalid_argument(path + ": cannot read YAML: " + e.what());
   }
+  return fromNode(root, p, path);
+}
+
+Parameters fromNode(const YAML::Node& root, Parameters p, const std::string& path) {
   if (!root || root.IsNull()) return p;
   if (!root.IsMap()) throw std::invalid_argument(path + ": expected a map of parameter: value");
   for (const auto& kv : root) {

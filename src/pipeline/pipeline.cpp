@@ -61,7 +61,8 @@ segmentation::Tree buildTree(const segmentation::Points& pts) {
 
 }  // namespace
 
-PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool with_reconstruction) const {
+PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool with_reconstruction,
+                             const Eigen::Vector3d& viewpoint_in) const {
   const Parameters& p = params_;
   if (cloud.size() > static_cast<std::size_t>(p.max_points))
     throw std::invalid_argument("cloud of " + std::to_string(cloud.size()) + " points exceeds max_points (" +
@@ -80,7 +81,7 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
     const preprocess::Points coarse = preprocess::voxelDownsample(raw, 0.05);
     if (coarse.size() >= 50) {
       const segmentation::Tree tree = buildTree(coarse);
-      const segmentation::Normals nn = segmentation::estimateNormals(coarse, tree, p.normal_k, Eigen::Vector3f::Zero());
+      const segmentation::Normals nn = segmentation::estimateNormals(coarse, tree, p.normal_k, viewpoint_in.cast<float>());
       if (!up) {
         up = preprocess::estimateUp(coarse, nn.n, static_cast<unsigned>(p.random_seed));
         if (up) up = preprocess::refineUp(*up, nn.n, 10.0);
@@ -106,7 +107,7 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   }
 
   // --- segmentation -----------------------------------------------------------
-  const Eigen::Vector3f viewpoint = Eigen::Vector3f::Zero();  // the sensor sits at the input's origin
+  const Eigen::Vector3f viewpoint = R * viewpoint_in.cast<float>();  // levelled
   const segmentation::Tree tree = buildTree(pts);
   const segmentation::Normals normals = segmentation::estimateNormals(pts, tree, p.normal_k, viewpoint);
   watch.mark("normals");
@@ -133,7 +134,7 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
     return res;
   }
   const std::vector<segmentation::WallPlane> walls =
-      segmentation::findWalls(pts, normals, floor_z, top_z, fc.ceiling.has_value(), Eigen::Vector2d::Zero(), p);
+      segmentation::findWalls(pts, normals, floor_z, top_z, fc.ceiling.has_value(), viewpoint.head<2>().cast<double>(), p);
   watch.mark("walls");
   for (std::size_t wi = 0; wi < walls.size(); ++wi) {
     char buf[200];

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 namespace dsr {
 
@@ -65,7 +66,14 @@ struct Parameters {
 // the defaults. Throws std::invalid_argument with the file and the key.
 Parameters loadParameters(const std::string& yaml_path, Parameters base = Parameters());
 
+// The same from YAML text (`source` names it in errors), e.g. built from ROS
+// parameters or a dynamic_reconfigure request.
+Parameters parseParameters(const std::string& yaml_text, Parameters base, const std::string& source);
+
 // Every parameter as YAML `name: value`, sorted by name.
 std::string dumpParameters(const Parameters& p);
+
+// The names of every parameter, sorted.
+std::vector<std::string> parameterNames();
 
 }  // namespace dsr

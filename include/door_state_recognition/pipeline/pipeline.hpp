@@ -81,7 +81,11 @@ class Pipeline {
   // Runs every stage. Non-finite points are dropped. Never throws for the
   // content of the cloud (an empty or degenerate cloud gives zero doors and a
   // warning); throws std::invalid_argument for a cloud above max_points.
-  PipelineResult run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool with_reconstruction = true) const;
+  // `viewpoint` is where the sensor was, in the cloud's frame (the origin for
+  // a cloud in its sensor's frame; the sensor's position once the cloud has
+  // been moved into a fixed frame): rays from it tell free space.
+  PipelineResult run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool with_reconstruction = true,
+                     const Eigen::Vector3d& viewpoint = Eigen::Vector3d::Zero()) const;
 
  private:
   Parameters params_;

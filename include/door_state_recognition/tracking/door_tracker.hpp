@@ -1,0 +1,36 @@
+// Stable door ids across consecutive clouds: a door keeps its id while it is
+// seen again within match_distance (opening centres, horizontally, in a
+// fixed frame) and for up to forget_after clouds without being seen.
+// ROS-free.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+namespace dsr {
+
+class DoorTracker {
+ public:
+  explicit DoorTracker(double match_distance = 0.5, int forget_after = 10)
+      : match_distance_(match_distance), forget_after_(forget_after) {}
+
+  // centres: opening centres of this cloud's doors in a fixed frame, up = z
+  // of that frame. Returns one id per centre, in order.
+  std::vector<std::uint32_t> update(const std::vector<Eigen::Vector3d>& centres);
+  void reset() { tracks_.clear(); }
+  std::size_t tracked() const { return tracks_.size(); }
+
+ private:
+  struct Track {
+    std::uint32_t id;
+    Eigen::Vector3d centre;
+    int missed = 0;
+  };
+  double match_distance_;
+  int forget_after_;
+  std::uint32_t next_id_ = 0;
+  std::vector<Track> tracks_;
+};
+
+}  // namespace dsr
