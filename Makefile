@@ -13,7 +13,7 @@ export PATH := /usr/bin:$(PATH)
 CATKIN_ARGS := -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 \
                -DPython3_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=ON
 
-.PHONY: deps build test demo bench clean
+.PHONY: deps build test demo bench clean rviz-shot
 
 deps:
 	@$(REPO)/scripts/install_deps.sh
@@ -42,6 +42,9 @@ demo: build
 
 bench: build
 	@$(REPO)/scripts/bench.sh
+
+rviz-shot: build
+	@$(REPO)/scripts/rviz_shot.sh
 
 clean:
 	rm -rf $(REPO)/build

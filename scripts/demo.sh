@@ -52,3 +52,16 @@ for j in s["unmatched_report"]:
 print(f"   precision {s['precision']:.2f}, recall {s['recall']:.2f}, state accuracy "
       f"{s['state_accuracy'] if s['state_accuracy'] is None else round(s['state_accuracy'], 2)}")
 PY
+
+echo "== the same scene as a rosbag, played through the nodelet (roslaunch bag_playback.launch rviz:=false)"
+export PATH=/usr/bin:$PATH
+set +u; source "$REPO/build/.ws/devel/setup.bash"; set -u
+PORT="${DEMO_ROS_PORT:-11366}"
+export ROS_MASTER_URI="http://localhost:$PORT"
+roslaunch -p "$PORT" door_state_recognition bag_playback.launch bag:="$PREFIX.bag" rviz:=false start_delay:=3 \
+  > "$OUT/roslaunch.log" 2>&1 &
+LAUNCH_PID=$!
+trap 'kill -INT $LAUNCH_PID 2>/dev/null; sleep 2; kill -9 $LAUNCH_PID 2>/dev/null || true' EXIT
+sleep 2
+/usr/bin/python3 "$REPO/scripts/demo_listener.py" "$PREFIX.json" 2
+echo "   (nodelet log: $OUT/roslaunch.log)"
