@@ -16,10 +16,14 @@
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <sstream>
 #include <cstring>
 #include <functional>
 
 #include "door_state_recognition/DoorStateArray.h"
+#include "door_state_recognition/DoorStateConfig.h"
+#include "door_state_recognition/pipeline/parameters.hpp"
+#include <dynamic_reconfigure/Reconfigure.h>
 #include "door_state_recognition/sim/ground_truth.hpp"
 #include "door_state_recognition/sim/scene.hpp"
 #include "door_state_recognition/sim/sensors.hpp"
@@ -254,6 +258,51 @@ TEST_F(NodeletTest, WithoutTfTheCloudIsDroppedAndProcessedOnceTfArrives) {
   EXPECT_TRUE(send(msg, &answer, 60.0)) << "no answer once the transform is known";
   EXPECT_EQ(answer.header.frame_id, "map");
   EXPECT_EQ(answer.doors.size(), 1u);
+}
+
+TEST_F(NodeletTest, ParametersChangeLiveThroughDynamicReconfigure) {
+  if (g_mode != "direct") GTEST_SKIP();
+  listen();
+  const SimScan scan = simulate("paper_house", 11);  // one door open at 110.6 deg
+  DoorStateArray before, after;
+  ASSERT_TRUE(send(toMsg(scan.cloud, "tls_scanner", 400.0), &before));
+  ASSERT_EQ(before.doors.size(), 1u);
+  EXPECT_EQ(before.doors[0].state, door_state_recognition::DoorState::OPEN);
+  auto set = [&](double open_from) {
+    dynamic_reconfigure::Reconfigure srv;
+    dynamic_reconfigure::DoubleParameter d;
+    d.name = "open_from_deg";
+    d.value = open_from;
+    srv.request.config.doubles.push_back(d);
+    return ros::service::call("/door_state/set_parameters", srv);
+  };
+  ASSERT_TRUE(set(115.0));
+  ASSERT_TRUE(send(toMsg(scan.cloud, "tls_scanner", 401.0), &after));
+  ASSERT_EQ(after.doors.size(), 1u);
+  EXPECT_EQ(after.doors[0].state, door_state_recognition::DoorState::SEMI_OPEN) << "open_from_deg 115 not in force";
+  ASSERT_TRUE(set(90.0));
+}
+
+TEST(Reconfigure, CfgDefaultsAreTheCodesDefaults) {
+  // The .cfg, config/default.yaml and the code must agree (the YAML is
+  // checked in test_pipeline): compare the generated config's defaults.
+  const door_state_recognition::DoorStateConfig def = door_state_recognition::DoorStateConfig::__getDefault__();
+  std::ostringstream os;
+  os.precision(17);
+  std::set<std::string> names;
+  for (const auto& d : door_state_recognition::DoorStateConfig::__getParamDescriptions__()) {
+    boost::any v;
+    d->getValue(def, v);
+    names.insert(d->name);
+    os << d->name << ": ";
+    if (d->type == "double") os << boost::any_cast<double>(v);
+    else if (d->type == "int") os << boost::any_cast<int>(v);
+    else os << '"' << boost::any_cast<std::string>(v) << '"';
+    os << "\n";
+  }
+  const std::vector<std::string> all = dsr::parameterNames();
+  EXPECT_EQ(names, std::set<std::string>(all.begin(), all.end())) << "the .cfg and the code list different parameters";
+  EXPECT_EQ(dsr::dumpParameters(dsr::parseParameters(os.str(), dsr::Parameters(), "cfg")), dsr::dumpParameters(dsr::Parameters()));
 }
 
 TEST(BagPlayback, DoorsOfThePlayedBagMatchItsTruth) {
