@@ -163,7 +163,12 @@ class DoorStateNodelet : public nodelet::Nodelet {
   void cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg) {
     const auto t0 = std::chrono::steady_clock::now();
     ++clouds_in_;
-    const std::string problem = dsr::ros_io::validate(*msg, static_cast<std::size_t>(params_.max_points));
+    std::size_t max_points;
+    {
+      std::lock_guard<std::mutex> lock(process_mutex_);
+      max_points = static_cast<std::size_t>(params_.max_points);
+    }
+    const std::string problem = dsr::ros_io::validate(*msg, max_points);
     if (!problem.empty()) {
       NODELET_ERROR_THROTTLE(5.0, "door_state: malformed cloud in frame '%s': %s", msg->header.frame_id.c_str(),
                              problem.c_str());

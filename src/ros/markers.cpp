@@ -81,7 +81,13 @@ visualization_msgs::MarkerArray makeMarkers(const PipelineResult& r, const std::
     auto corners = base(h, "door_corners", id, visualization_msgs::Marker::SPHERE_LIST);
     corners.scale.x = corners.scale.y = corners.scale.z = 0.08;
     corners.color = colour;
-    for (const auto& c : d.leaf_corners) corners.points.push_back(pt(c));
+    // The leaf's box: its four mid-plane corners, half a leaf thickness to either side.
+    Eigen::Vector3d across = (d.leaf_corners[1] - d.leaf_corners[0]).cross(d.leaf_corners[3] - d.leaf_corners[0]);
+    across = across.norm() > 1e-9 ? Eigen::Vector3d(across.normalized() * 0.02) : Eigen::Vector3d::Zero();
+    for (const auto& c : d.leaf_corners) {
+      corners.points.push_back(pt(c + across));
+      corners.points.push_back(pt(c - across));
+    }
     out.markers.push_back(corners);
 
     auto leaf = base(h, "leaf_lines", id, visualization_msgs::Marker::LINE_LIST);
