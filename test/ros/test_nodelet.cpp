@@ -90,6 +90,12 @@ class NodeletTest : public ::testing::Test {
   void SetUp() override {
     pub_ = nh_.advertise<sensor_msgs::PointCloud2>("points", 1);
   }
+  // Callbacks run on spinner threads: end the subscriptions (which waits for
+  // callbacks under way) before the members they write to are destroyed.
+  void TearDown() override {
+    doors_sub_.shutdown();
+    markers_sub_.shutdown();
+  }
   void listen() {
     doors_sub_ = nh_.subscribe<DoorStateArray>("doors", 10, [this](const door_state_recognition::DoorStateArrayConstPtr& m) {
       std::lock_guard<std::mutex> l(rx_.m);
@@ -118,10 +124,10 @@ class NodeletTest : public ::testing::Test {
         seconds);
   }
 
+  Received rx_;  // declared first, destroyed last
   ros::NodeHandle nh_;
   ros::Publisher pub_;
   ros::Subscriber doors_sub_, markers_sub_;
-  Received rx_;
 };
 
 // Doors of a message matched to the truth by opening centre (0.5 m, horizontal).
