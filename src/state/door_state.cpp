@@ -44,7 +44,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   const double z1 = floor_z + std::min(1.75, (std::isfinite(door.top) ? door.top - floor_z : 2.0) - 0.1);
   const double zbin = 0.1, abin = 0.05;
   const int nz = std::max(1, static_cast<int>((z1 - z0) / zbin));
-  const double sc = (door.s0 + door.s1) / 2, reach = w + 0.25;
+  const double s_mid = (door.s0 + door.s1) / 2, reach = w + 0.25;
   // A leaf may be longer than the doorway seen (a leaf ajar hides its own
   // doorway): hypotheses reach up to the widest door from either jamb.
   const double Lmax = door.paired ? L + 0.05 : std::max(L, p.door_max_width), reach_h = Lmax + 0.15;
@@ -75,7 +75,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   };
   std::vector<Ray> rays;
   const Eigen::Vector2d vsd(wall.along(viewpoint), wall.signedDistance(viewpoint));
-  const Eigen::Vector2d dc(sc, -t / 2);
+  const Eigen::Vector2d dc(s_mid, -t / 2);
   for (const auto& q : points) {
     const Eigen::Vector2d qsd(wall.along(q), wall.signedDistance(q));
     const Eigen::Vector2d r = qsd - vsd;
@@ -317,8 +317,6 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   const Eigen::Vector2d hinge_xy = toXY(s_h, hinge_d);
   fit.hinge = hinge_xy;
   fit.direction = (dir_sd.x() * wall.direction + dir_sd.y() * wall.normal).normalized();
-  std::vector<float> zs;
-  for (int i : fit.inliers) zs.push_back(points[i].z());
   // The leaf's top: highest of its points over its whole height.
   double top = z1;
   for (std::size_t i = 0; i < points.size(); ++i) {
