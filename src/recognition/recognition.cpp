@@ -129,21 +129,35 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   };
   const double footprint = std::max(p.voxel_size, 0.01);
   // The wall's own noise sets how thick its face is: laser scans are
-  // millimetre-sharp, far depth-camera returns are centimetres apart.
-  double tol = p.face_tolerance;
+  // millimetre-sharp, depth-camera returns spread with range. The tolerance
+  // is local: 2.5 sigma of the wall's inliers within half a metre along it.
+  std::vector<double> col_tol(cols, p.face_tolerance);
   {
-    std::vector<double> dev;
-    for (int i : wall.inliers) dev.push_back(std::abs(wall.signedDistance(points[i])));
-    if (dev.size() >= 20) {
-      std::nth_element(dev.begin(), dev.begin() + dev.size() / 2, dev.end());
-      tol = std::max(tol, 2.5 * 1.4826 * dev[dev.size() / 2]);
+    std::vector<std::vector<float>> dev(cols);
+    for (int i : wall.inliers) {
+      const int c = static_cast<int>(std::floor((wall.along(points[i]) - s_lo) / cell));
+      if (c >= 0 && c < cols) dev[c].push_back(static_cast<float>(std::abs(wall.signedDistance(points[i]))));
+    }
+    const int win = std::max(1, static_cast<int>(0.5 / cell));
+    std::vector<float> pool;
+    for (int c = 0; c < cols; ++c) {
+      pool.clear();
+      for (int k = std::max(0, c - win); k <= std::min(cols - 1, c + win); ++k) pool.insert(pool.end(), dev[k].begin(), dev[k].end());
+      if (pool.size() < 20) continue;
+      std::nth_element(pool.begin(), pool.begin() + pool.size() / 2, pool.end());
+      col_tol[c] = std::max(p.face_tolerance, 2.5 * 1.4826 * pool[pool.size() / 2]);
     }
   }
+  auto tolAt = [&](double s) {
+    const int c = static_cast<int>(std::floor((s - s_lo) / cell));
+    return col_tol[std::clamp(c, 0, cols - 1)];
+  };
   for (const auto& pt : points) {
     const double d = wall.signedDistance(pt);
     if (d >= d_view) continue;  // beside or behind the sensor
-    if (std::abs(d) <= tol) {
-      const double s = wall.along(pt);
+    const double s_pt = wall.along(pt);
+    if (std::abs(d) <= tolAt(s_pt)) {
+      const double s = s_pt;
       if (Cell* c = cellAt(s, pt.z())) {
         ++c->face;
         c->out += d > p.casing_min_offset;
@@ -230,8 +244,11 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     if (w <= 0.13) legs.push_back({c, e});
     c = e + 1;
   }
-  auto hasHead = [&](double a, double b) {
+  // 1: trim runs across the doorway above the body; 0: the rows there show
+  // wall without trim; -1: nothing is seen there (a camera's view ends lower).
+  auto headState = [&](double a, double b) {
     const int c0 = std::max(0, static_cast<int>((a - s_lo) / cell)), c1 = std::min(cols - 1, static_cast<int>((b - s_lo) / cell));
+    bool seen = false;
     for (int r = body1; r < rows; ++r) {
       int f = 0, o = 0, covered = 0;
       for (int c = c0; c <= c1; ++c) {
@@ -240,14 +257,19 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
         o += g.out;
         covered += g.face > 0;
       }
+      seen |= covered >= 0.3 * (c1 - c0 + 1);
       // Trim across most of the doorway, not a few trim points at its edge.
-      if (f >= 5 && o >= 0.7 * f && covered >= 0.6 * (c1 - c0 + 1)) return true;
+      if (f >= 5 && o >= 0.7 * f && covered >= 0.6 * (c1 - c0 + 1)) return 1;
     }
-    return false;
+    return seen ? 0 : -1;
   };
+  auto hasHead = [&](double a, double b) { return headState(a, b) == 1; };
   for (std::size_t i = 0; i + 1 < legs.size(); ++i) {
     const double a = subS(legs[i].second + 1), b = subS(legs[i + 1].first);
-    if (b - a >= p.door_min_width - 0.1 && b - a <= p.door_max_width + 0.1 && hasHead(a, b)) {
+    // Without a view of the head, both legs must be clearly trim: two sub-columns wide.
+    const int head = headState(a, b);
+    const bool strong_legs = legs[i].second > legs[i].first && legs[i + 1].second > legs[i + 1].first;
+    if (b - a >= p.door_min_width - 0.1 && b - a <= p.door_max_width + 0.1 && (head == 1 || (head == -1 && strong_legs))) {
       addCandidate(a, b, true);
       ++i;
     }
@@ -268,8 +290,8 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     double s0 = colS(c), s1 = colS(e + 1);
     std::vector<double> left, right;
     for (const auto& pt : points) {
-      if (std::abs(wall.signedDistance(pt)) > tol || pt.z() < floor_z + 0.25 || pt.z() > floor_z + 1.75) continue;
       const double a = wall.along(pt);
+      if (std::abs(wall.signedDistance(pt)) > tolAt(a) || pt.z() < floor_z + 0.25 || pt.z() > floor_z + 1.75) continue;
       if (a > s0 - 0.12 && a < s0 + 0.06) left.push_back(a);
       if (a > s1 - 0.06 && a < s1 + 0.12) right.push_back(a);
     }
@@ -357,12 +379,12 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     std::vector<double> depth_l, depth_r;
     for (const auto& pt : points) {
       const double dd = -wall.signedDistance(pt);
-      if (dd < tol || dd > 0.6 || pt.z() < floor_z + 0.25 || pt.z() > floor_z + 1.75) continue;
       const double a = wall.along(pt);
+      if (dd < tolAt(a) || dd > 0.6 || pt.z() < floor_z + 0.25 || pt.z() > floor_z + 1.75) continue;
       if (std::abs(a - d.s0) < 0.03) depth_l.push_back(dd);
       if (std::abs(a - d.s1) < 0.03) depth_r.push_back(dd);
     }
-    d.thickness = std::max(thicknessFrom(depth_l, tol), thicknessFrom(depth_r, tol));
+    d.thickness = std::max(thicknessFrom(depth_l, tolAt(d.s0)), thicknessFrom(depth_r, tolAt(d.s1)));
   }
   return out;
 }

@@ -193,7 +193,10 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
         const double s1 = std::max((a - o.point).dot(o.direction), (b - o.point).dot(o.direction));
         shadowed |= off < 0.3 && s0 < o.s_max && s1 > o.s_min;
       }
-      if (static_cast<int>(w.inliers.size()) >= p.min_wall_points && w.s_max - w.s_min >= p.min_wall_length && tall &&
+      // Without a ceiling to reach, a door leaf is as tall as a wall: then a
+      // wall must also be longer than any door.
+      const double min_length = ceiling_known ? p.min_wall_length : std::max(p.min_wall_length, p.door_max_width + 0.1);
+      if (static_cast<int>(w.inliers.size()) >= p.min_wall_points && w.s_max - w.s_min >= min_length && tall &&
           reaches_top && !shadowed)
         walls.push_back(std::move(w));
     }

@@ -165,7 +165,8 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
         if (rec > 0 && rec + lt > t) continue;
         const double s_h = h == 0 ? door.s0 : door.s1, e0 = h == 0 ? 1.0 : -1.0;
         const double m = sw == 0 ? 1.0 : -1.0, d_h = sw == 0 ? -rec : -t + rec;
-        for (int deg = 0; deg <= 180; deg += 2) {  // refined below
+        // Beyond 170 deg a leaf lies flat on its wall and cannot be told from it.
+        for (int deg = 0; deg <= 170; deg += 2) {  // refined below
           const Score sc = evaluate(s_h, d_h, e0, m, deg * M_PI / 180);
           if (sc.score > best.score) best = sc, best_h = h, best_sw = sw, best_deg = deg, best_recess = rec, best_s = s_h;
         }
@@ -180,7 +181,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     for (int ds = -reach_steps; ds <= reach_steps; ++ds)
       for (int dd = -5; dd <= 5; ++dd) {
         const double deg = deg_center + dd * 0.5;
-        if (deg < 0 || deg > 180) continue;
+        if (deg < 0 || deg > 170) continue;
         const Score sc = evaluate(s_center + ds * 0.02, d_h, e0, m, deg * M_PI / 180);
         if (sc.score > best.score) best = sc, best_deg = deg, best_s = s_center + ds * 0.02;
       }
