@@ -199,7 +199,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       else if (g.through || g.front || g.recess) ++e;
     }
     const int observed = f + e;
-    const bool enough = observed >= 0.25 * nbody;
+    const bool enough = observed >= std::max(4.0, 0.15 * nbody);
     face[c] = enough ? static_cast<double>(f) / observed : (f > 0 ? 1.0 : 0.0);
     expl[c] = enough ? static_cast<double>(e) / observed : 0.0;
   }
