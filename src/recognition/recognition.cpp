@@ -282,12 +282,38 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       ++c;
       continue;
     }
+    // A camera sees nothing through parts of a doorway whose room beyond is
+    // out of range: unobserved columns belong to the run when open columns
+    // or a wall face bound them (within 0.6 m), never the unseen ends of the wall.
+    auto unseen = [&](int k) { return face[k] == 0 && expl[k] == 0; };
+    const int reach_cols = static_cast<int>(0.6 / cell);
     int e = c;
-    // Bridge one weak column (noise), never a column of wall face: a hinge
-    // jamb between a doorway and the shadow of its leaf ends the run.
-    while (e + 1 < cols && (open(e + 1) || (e + 2 < cols && face[e + 1] < 0.5 && open(e + 2)))) ++e;
+    for (;;) {
+      int k = e + 1;
+      while (k < cols && k - e <= reach_cols && unseen(k)) ++k;
+      if (k < cols && k - e <= reach_cols + 1 && open(k)) {
+        e = k;
+        continue;
+      }
+      // Bridge one weak column (noise), never a column of wall face: a hinge
+      // jamb between a doorway and the shadow of its leaf ends the run.
+      if (e + 2 < cols && face[e + 1] < 0.5 && open(e + 2)) {
+        e += 2;
+        continue;
+      }
+      break;
+    }
+    int lo = c, hi = e;
+    {
+      int k = c - 1;
+      while (k >= 0 && c - k <= reach_cols && unseen(k)) --k;
+      if (k >= 0 && k < c - 1 && face[k] >= 0.5) lo = k + 1;
+      k = e + 1;
+      while (k < cols && k - e <= reach_cols && unseen(k)) ++k;
+      if (k < cols && k > e + 1 && face[k] >= 0.5) hi = k - 1;
+    }
     // Jambs where the face points end, refined from the points themselves.
-    double s0 = colS(c), s1 = colS(e + 1);
+    double s0 = colS(lo), s1 = colS(hi + 1);
     std::vector<double> left, right;
     for (const auto& pt : points) {
       const double a = wall.along(pt);
