@@ -70,6 +70,7 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   PipelineResult res;
   Stopwatch watch(&res.timing_ms);
   res.points_in = cloud.size();
+  const bool organized = cloud.height > 1;  // a camera frame: no return means nothing in range
 
   // --- preprocess: sanitise, level, downsample --------------------------------
   preprocess::Points raw = preprocess::sanitize(cloud, p.max_abs_coordinate);
@@ -153,7 +154,7 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   for (std::size_t wi = 0; wi < walls.size(); ++wi) {
     const segmentation::WallPlane& wall = walls[wi];
     for (int i : wall.inliers) is_wall[i] = 1;
-    for (const recognition::Doorway& d : recognition::findDoorways(pts, wall, floor_z, top_z, viewpoint, p)) {
+    for (const recognition::Doorway& d : recognition::findDoorways(pts, wall, floor_z, top_z, viewpoint, p, organized)) {
       const double t = d.thickness > 0.04 ? d.thickness : p.default_wall_thickness;
       const state::LeafFit leaf = state::fitLeaf(pts, wall, d, floor_z, t, viewpoint, p);
       if (!leaf.found) {

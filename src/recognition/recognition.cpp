@@ -108,7 +108,8 @@ double thicknessFrom(std::vector<double> depth, double start) {
 }  // namespace
 
 std::vector<Doorway> findDoorways(const Points& points, const segmentation::WallPlane& wall, double floor_z,
-                                  double top_z, const Eigen::Vector3f& viewpoint, const Parameters& p) {
+                                  double top_z, const Eigen::Vector3f& viewpoint, const Parameters& p,
+                                  bool no_return_is_free) {
   const double cell = p.grid_cell, row_h = 0.05;
   const double s_lo = wall.s_min - 0.3, s_hi = wall.s_max + 0.3;
   const int cols = std::max(1, static_cast<int>(std::ceil((s_hi - s_lo) / cell)));
@@ -385,6 +386,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
         else if (g.through) ++t;
         else if (g.recess) ++re;
         else if (g.front) ++fr;
+        else if (no_return_is_free) ++t;  // a camera got nothing back in range: nothing is there
       }
     n = f + t + fr + re;  // observed cells
     if (n > 0) {

@@ -53,8 +53,12 @@ struct Doorway {
 // or occlusion form openings; pairs of trim legs (face points standing out by
 // casing_min_offset) form doorways even when a closed leaf is flush with the
 // wall. Candidates are door_min_width..door_max_width wide.
+// no_return_is_free: the cloud is an organized camera frame, where a body
+// cell of a doorway without any return means nothing was there in range
+// (counted as seen through).
 std::vector<Doorway> findDoorways(const Points& points, const segmentation::WallPlane& wall, double floor_z,
-                                  double top_z, const Eigen::Vector3f& viewpoint, const Parameters& p);
+                                  double top_z, const Eigen::Vector3f& viewpoint, const Parameters& p,
+                                  bool no_return_is_free = false);
 
 }  // namespace recognition
 }  // namespace dsr
