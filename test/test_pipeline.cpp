@@ -296,6 +296,26 @@ TEST(DoorState, RandomLaserScannedRoomsMeetTheFigures) {
   EXPECT_GE(m.recall(), 0.60);
 }
 
+TEST(DoorState, CameraFramesFindTheDoorInView) {
+  // 12 simulated 640x480 RGB-D frames (camera optical frame, up -y, no
+  // ceiling in view), the camera looking at one door of a random room. Held at
+  // what the pipeline reaches today on these seeds (precision 1.0, recall
+  // 0.75, every found state right); the issue asks for the state right in
+  // >= 90 % of frames, which is not reached (README).
+  std::vector<eval::EvalResult> all;
+  std::ostringstream log;
+  for (std::uint64_t seed = 3000; seed < 3012; ++seed) {
+    const Scored s = runScene(sim::randomRoom(seed), seed, "rgbd");
+    log << "seed " << seed << ": " << describe(s) << " matched " << s.eval.matched << "/" << s.eval.true_doors << "\n";
+    all.push_back(s.eval);
+  }
+  const eval::EvalResult m = eval::merge(all);
+  SCOPED_TRACE(log.str());
+  EXPECT_GE(m.precision(), 0.75);
+  EXPECT_GE(m.recall(), 0.6);
+  EXPECT_GE(m.stateAccuracy(), 0.95);
+}
+
 // ----------------------------------------------------------------- hostile input
 
 TEST(BadInput, DegenerateCloudsGiveZeroDoorsAndAWarning) {
