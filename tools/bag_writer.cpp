@@ -3,6 +3,7 @@
 #include <pcl_conversions/pcl_conversions.h>
 #include <rosbag/bag.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <tf2_eigen/tf2_eigen.h>
 #include <tf2_msgs/TFMessage.h>
 
 #include <stdexcept>
@@ -16,19 +17,10 @@ void writeBag(const std::string& path, const sim::SimulatedCloud& sim, const Bag
     rosbag::Bag bag(path, rosbag::bagmode::Write);
     const ros::Time t0(o.start_time);
 
-    geometry_msgs::TransformStamped tf;
+    geometry_msgs::TransformStamped tf = tf2::eigenToTransform(sim.sensor_to_world);
     tf.header.stamp = t0;
     tf.header.frame_id = o.fixed_frame;
     tf.child_frame_id = sim.frame_id;
-    const Eigen::Vector3d t = sim.sensor_to_world.translation();
-    const Eigen::Quaterniond q(sim.sensor_to_world.linear());
-    tf.transform.translation.x = t.x();
-    tf.transform.translation.y = t.y();
-    tf.transform.translation.z = t.z();
-    tf.transform.rotation.x = q.x();
-    tf.transform.rotation.y = q.y();
-    tf.transform.rotation.z = q.z();
-    tf.transform.rotation.w = q.w();
     tf2_msgs::TFMessage tfm;
     tfm.transforms.push_back(tf);
     auto latched = boost::make_shared<ros::M_string>();

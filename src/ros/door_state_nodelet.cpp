@@ -40,14 +40,6 @@ namespace door_state_recognition {
 
 namespace {
 
-geometry_msgs::Point point(const Eigen::Vector3d& v) {
-  geometry_msgs::Point p;
-  p.x = v.x();
-  p.y = v.y();
-  p.z = v.z();
-  return p;
-}
-
 // A dynamic_reconfigure config as YAML `name: value`, for dsr::parseParameters.
 std::string toYaml(const DoorStateConfig& config) {
   std::ostringstream os;
@@ -222,14 +214,14 @@ class DoorStateNodelet : public nodelet::Nodelet {
       s.state = static_cast<std::uint8_t>(d.state);
       s.opening_angle = static_cast<float>(d.opening_angle_deg * M_PI / 180.0);
       s.confidence = static_cast<float>(d.confidence);
-      s.hinge = point(d.hinge);
-      s.opening_center = point(d.opening_center);
+      s.hinge = tf2::toMsg(d.hinge);
+      s.opening_center = tf2::toMsg(d.opening_center);
       s.wall_normal.x = d.wall_normal.x();
       s.wall_normal.y = d.wall_normal.y();
       s.wall_normal.z = d.wall_normal.z();
       s.width = static_cast<float>(d.width);
       s.height = static_cast<float>(d.height);
-      for (int k = 0; k < 4; ++k) s.leaf_corners[k] = point(d.leaf_corners[k]);
+      for (int k = 0; k < 4; ++k) s.leaf_corners[k] = tf2::toMsg(d.leaf_corners[k]);
       out->doors.push_back(s);
     }
     pub_doors_.publish(out);

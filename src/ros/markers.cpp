@@ -1,6 +1,8 @@
 #include "door_state_recognition/ros/markers.hpp"
 
 #include <cmath>
+
+#include <tf2_eigen/tf2_eigen.h>
 #include <cstdio>
 
 namespace dsr {
@@ -16,13 +18,8 @@ std_msgs::ColorRGBA rgba(float r, float g, float b, float a = 1.0f) {
   return c;
 }
 
-geometry_msgs::Point pt(const Eigen::Vector3d& v) {
-  geometry_msgs::Point p;
-  p.x = v.x();
-  p.y = v.y();
-  p.z = v.z();
-  return p;
-}
+// Eigen expressions evaluated once, then tf2's conversion.
+geometry_msgs::Point pt(const Eigen::Vector3d& v) { return tf2::toMsg(v); }
 
 visualization_msgs::Marker base(const std_msgs::Header& h, const std::string& ns, int id, int type) {
   visualization_msgs::Marker m;

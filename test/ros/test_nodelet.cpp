@@ -7,6 +7,7 @@
 #include <pcl_conversions/pcl_conversions.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <visualization_msgs/MarkerArray.h>
 
@@ -169,19 +170,10 @@ TEST_F(NodeletTest, DoorsOfASimulatedScanMatchTheTruthWithStableIdsAndMarkers) {
   const std::string frame = "tls_scanner";
   tf2_ros::StaticTransformBroadcaster tfb;
   if (g_mode == "tf") {
-    geometry_msgs::TransformStamped t;
+    geometry_msgs::TransformStamped t = tf2::eigenToTransform(scan.cloud.sensor_to_world);
     t.header.frame_id = "map";
     t.child_frame_id = "tls_scanner";
     t.header.stamp = ros::Time(0.5);
-    const Eigen::Vector3d p = scan.cloud.sensor_to_world.translation();
-    const Eigen::Quaterniond q(scan.cloud.sensor_to_world.linear());
-    t.transform.translation.x = p.x();
-    t.transform.translation.y = p.y();
-    t.transform.translation.z = p.z();
-    t.transform.rotation.w = q.w();
-    t.transform.rotation.x = q.x();
-    t.transform.rotation.y = q.y();
-    t.transform.rotation.z = q.z();
     tfb.sendTransform(t);
   }
   std::set<std::uint32_t> ids_seen;
