@@ -12,6 +12,7 @@
 #include <string>
 
 #include "bag_writer.hpp"
+#include "cli_args.hpp"
 #include "door_state_recognition/sim/ground_truth.hpp"
 #include "door_state_recognition/sim/scene.hpp"
 #include "door_state_recognition/sim/sensors.hpp"
@@ -46,33 +47,9 @@ options:
   -h, --help             this text
 )";
 
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-double toDouble(const std::string& flag, const std::string& v) {
-  std::size_t n = 0;
-  double x = 0;
-  try {
-    x = std::stod(v, &n);
-  } catch (...) {
-    n = 0;
-  }
-  if (n != v.size() || !std::isfinite(x)) throw UsageError(flag + " needs a number, got '" + v + "'");
-  return x;
-}
-
-long long toInt(const std::string& flag, const std::string& v) {
-  std::size_t n = 0;
-  long long x = 0;
-  try {
-    x = std::stoll(v, &n);
-  } catch (...) {
-    n = 0;
-  }
-  if (n != v.size()) throw UsageError(flag + " needs an integer, got '" + v + "'");
-  return x;
-}
+using dsr::tools::toDouble;
+using dsr::tools::toInt;
+using dsr::tools::UsageError;
 
 std::pair<int, int> toRange(const std::string& flag, const std::string& v) {
   const auto colon = v.find(':');
@@ -100,10 +77,7 @@ int main(int argc, char** argv) {
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
-      auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw UsageError(a + " needs a value");
-        return argv[++i];
-      };
+      auto value = [&] { return dsr::tools::nextValue(argc, argv, i); };
       if (a == "-h" || a == "--help") {
         std::cout << kUsage;
         return 0;

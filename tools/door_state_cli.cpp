@@ -7,6 +7,7 @@
 #include <iostream>
 #include <string>
 
+#include "cli_args.hpp"
 #include "door_state_recognition/io/cloud_reader.hpp"
 #include "door_state_recognition/io/report.hpp"
 #include "door_state_recognition/pipeline/pipeline.hpp"
@@ -35,9 +36,7 @@ exit status: 0 report written (zero doors included), 2 bad arguments or an
 unreadable or malformed input, 1 anything else.
 )";
 
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+using dsr::tools::UsageError;
 
 }  // namespace
 
@@ -47,10 +46,7 @@ int main(int argc, char** argv) {
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
-      auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw UsageError(a + " needs a value");
-        return argv[++i];
-      };
+      auto value = [&] { return dsr::tools::nextValue(argc, argv, i); };
       if (a == "-h" || a == "--help") {
         std::cout << kUsage;
         return 0;

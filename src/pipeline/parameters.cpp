@@ -74,9 +74,10 @@ void check(bool ok, const std::string& name, const std::string& range) {
 
 bool in(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; }
 
-}  // namespace
-
+// Parameters from a parsed YAML map over `p`; `path` names the source in errors.
 Parameters fromNode(const YAML::Node& root, Parameters p, const std::string& path);
+
+}  // namespace
 
 void Parameters::validate() const {
   static const char* axes[] = {"+x", "-x", "+y", "-y", "+z", "-z", "auto"};
@@ -160,6 +161,8 @@ Parameters loadParameters(const std::string& path, Parameters p) {
   return fromNode(root, p, path);
 }
 
+namespace {
+
 Parameters fromNode(const YAML::Node& root, Parameters p, const std::string& path) {
   if (!root || root.IsNull()) return p;
   if (!root.IsMap()) throw std::invalid_argument(path + ": expected a map of parameter: value");
@@ -180,5 +183,7 @@ Parameters fromNode(const YAML::Node& root, Parameters p, const std::string& pat
   }
   return p;
 }
+
+}  // namespace
 
 }  // namespace dsr
