@@ -4,8 +4,12 @@
 # Also: make build, make bench, make clean.
 SHELL := /bin/bash
 REPO  := $(abspath $(dir $(lastword $(MAKEFILE_LIST))))
-WS    := $(REPO)/build/.ws
-BIN   := $(REPO)/build/bin
+# BUILD may be moved (make build BUILD=/tmp/other) to keep a second workspace
+# apart, e.g. for a second person building at the same time.
+BUILD ?= $(REPO)/build
+WS    := $(BUILD)/.ws
+BIN   := $(BUILD)/bin
+export DSR_BUILD := $(BUILD)
 JOBS  ?= 2
 # Debian's ROS lives in /usr; a second python3 (pyenv) on PATH lacks the ROS
 # Python modules, so /usr/bin goes first for catkin, rostest and roslaunch.
@@ -20,9 +24,9 @@ deps:
 
 build: deps
 	@mkdir -p $(WS)/src
-	@ln -sfn ../../.. $(WS)/src/door_state_recognition
-	@cd $(WS) && catkin_make -j$(JOBS) $(CATKIN_ARGS) >$(REPO)/build/catkin_make.log 2>&1 \
-	  || { tail -n 60 $(REPO)/build/catkin_make.log; echo "build failed: full log in build/catkin_make.log"; exit 1; }
+	@ln -sfn $(REPO) $(WS)/src/door_state_recognition
+	@cd $(WS) && catkin_make -j$(JOBS) $(CATKIN_ARGS) >$(BUILD)/catkin_make.log 2>&1 \
+	  || { tail -n 60 $(BUILD)/catkin_make.log; echo "build failed: full log in build/catkin_make.log"; exit 1; }
 	@mkdir -p $(BIN)
 	@for exe in $(WS)/devel/lib/door_state_recognition/*; do \
 	  case "$$(basename $$exe)" in test_*) continue;; esac; [ -x "$$exe" ] && [ -f "$$exe" ] && ln -sfn "$$exe" $(BIN)/$$(basename $$exe); done; true
@@ -31,9 +35,9 @@ build: deps
 test: build
 	@rm -rf $(WS)/build/test_results
 	@cd $(WS) && source devel/setup.bash && \
-	  catkin_make -j$(JOBS) $(CATKIN_ARGS) tests >$(REPO)/build/run_tests.log 2>&1 || { tail -n 40 $(REPO)/build/run_tests.log; exit 1; }; \
-	  catkin_make -j1 $(CATKIN_ARGS) run_tests >>$(REPO)/build/run_tests.log 2>&1; \
-	  grep -E "^\[  (PASSED|FAILED)  \]|^\[==========\] .* ran|Failure|rostest|FAILURE" $(REPO)/build/run_tests.log | tail -n 60; \
+	  catkin_make -j$(JOBS) $(CATKIN_ARGS) tests >$(BUILD)/run_tests.log 2>&1 || { tail -n 40 $(BUILD)/run_tests.log; exit 1; }; \
+	  catkin_make -j1 $(CATKIN_ARGS) run_tests >>$(BUILD)/run_tests.log 2>&1; \
+	  grep -E "^\[  (PASSED|FAILED)  \]|^\[==========\] .* ran|Failure|rostest|FAILURE" $(BUILD)/run_tests.log | tail -n 60; \
 	  catkin_test_results build/test_results | tail -n 1; \
 	  /usr/bin/python3 $(REPO)/scripts/test_summary.py build/test_results
 
@@ -47,4 +51,4 @@ rviz-shot: build
 	@$(REPO)/scripts/rviz_shot.sh
 
 clean:
-	rm -rf $(REPO)/build
+	rm -rf $(BUILD)

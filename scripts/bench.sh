@@ -4,8 +4,9 @@
 # run. Prints a table and writes build/bench/bench.json.
 set -euo pipefail
 REPO="$(cd "$(dirname "$0")/.." && pwd)"
-BIN="$REPO/build/bin"
-OUT="$REPO/build/bench"
+BUILD="${DSR_BUILD:-$REPO/build}"
+BIN="$BUILD/bin"
+OUT="$BUILD/bench"
 RUNS="${BENCH_RUNS:-5}"
 mkdir -p "$OUT"
 /usr/bin/python3 - "$BIN" "$OUT" "$RUNS" <<'PY'

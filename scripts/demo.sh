@@ -3,8 +3,9 @@
 # once the pipeline's command-line tool is built - run it and score it.
 set -euo pipefail
 REPO="$(cd "$(dirname "$0")/.." && pwd)"
-BIN="$REPO/build/bin"
-OUT="$REPO/build/demo"
+BUILD="${DSR_BUILD:-$REPO/build}"
+BIN="$BUILD/bin"
+OUT="$BUILD/demo"
 SCENE="${DEMO_SCENE:-random}"
 SEED="${DEMO_SEED:-4}"
 mkdir -p "$OUT"
@@ -55,7 +56,7 @@ PY
 
 echo "== the same scene as a rosbag, played through the nodelet (roslaunch bag_playback.launch rviz:=false)"
 export PATH=/usr/bin:$PATH
-set +u; source "$REPO/build/.ws/devel/setup.bash"; set -u
+set +u; source "$BUILD/.ws/devel/setup.bash"; set -u
 PORT="${DEMO_ROS_PORT:-11366}"
 export ROS_MASTER_URI="http://localhost:$PORT"
 roslaunch -p "$PORT" door_state_recognition bag_playback.launch bag:="$PREFIX.bag" rviz:=false start_delay:=3 \

@@ -4,17 +4,18 @@
 #   scripts/rviz_shot.sh [OUT.png] [SEED]      (make rviz-shot)
 set -euo pipefail
 REPO="$(cd "$(dirname "$0")/.." && pwd)"
+BUILD="${DSR_BUILD:-$REPO/build}"
 OUT="${1:-$REPO/doc/rviz_door_state.png}"
 SEED="${2:-4}"
-WORK="$REPO/build/rviz_shot"
+WORK="$BUILD/rviz_shot"
 DISPLAY_NUM="${RVIZ_SHOT_DISPLAY:-77}"
 PORT="${RVIZ_SHOT_PORT:-11377}"
 mkdir -p "$WORK" "$(dirname "$OUT")"
 export PATH=/usr/bin:$PATH
-set +u; source "$REPO/build/.ws/devel/setup.bash"; set -u
+set +u; source "$BUILD/.ws/devel/setup.bash"; set -u
 export ROS_MASTER_URI="http://localhost:$PORT"
 
-"$REPO/build/bin/door_scene_sim" --quiet --seed "$SEED" --points 400000 --formats bag,json \
+"$BUILD/bin/door_scene_sim" --quiet --seed "$SEED" --points 400000 --formats bag,json \
   --bag-count 40 --bag-rate 1 --out "$WORK/scene"
 
 pids=()
