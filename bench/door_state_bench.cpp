@@ -56,6 +56,7 @@ options:
   --accuracy-scenes K       extra laser rooms (seeds 1000..) and RGB-D frames scored once each (default 10; 0: none)
   --accuracy-points N       rays of those rooms (default 400000)
   --json PATH               where to write the results (default bench.json)
+  --note TEXT               printed in the header and kept in the JSON (make bench: the git commit)
   -h, --help                this text
 )";
 
@@ -68,6 +69,7 @@ struct Options {
   int accuracy_scenes = 10;
   std::size_t accuracy_points = 400000;
   std::string json_path = "bench.json";
+  std::string note;
 };
 
 struct UsageError : std::runtime_error {
@@ -104,6 +106,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--accuracy-scenes") o.accuracy_scenes = static_cast<int>(toInt(a, value()));
     else if (a == "--accuracy-points") o.accuracy_points = static_cast<std::size_t>(toInt(a, value()));
     else if (a == "--json") o.json_path = value();
+    else if (a == "--note") o.note = value();
     else if (a == "--sizes") {
       o.sizes.clear();
       std::stringstream ss(value());
@@ -369,6 +372,7 @@ int main(int argc, char** argv) {
               static_cast<long>(machine["cpus"].get<long>()), machine["cpu"].get<std::string>().c_str(),
               machine["loadavg_at_start"].get<std::string>().c_str(), opt.runs, opt.baseline_runs,
               static_cast<unsigned long long>(opt.seed));
+  if (!opt.note.empty()) std::printf("%s\n", opt.note.c_str());
   std::printf("ours: dsr::Pipeline without reconstruction; stock: pcl::VoxelGrid, NormalEstimationOMP (all cores), "
               "iterative SACSegmentation (SACMODEL_PARALLEL_PLANE), RegionGrowing, MomentOfInertiaEstimation, "
               "BoundaryEstimation; doors on both by our findDoorways + fitLeaf\n");
@@ -402,6 +406,13 @@ int main(int argc, char** argv) {
       std::printf("%-15s %10s %10s %11s %9s\n", k.c_str(), fmt("%.1f", a).c_str(), fmt("%.1f", b).c_str(),
                   fmt("%.3f", a / b).c_str(), fmt("%.1fx", b / a).c_str());
     }
+    {
+      const double a = ours["stage_median_ms"].value("total", 0.0) - ours["stage_median_ms"].value("doors", 0.0);
+      const double b = have_stock ? stock["stage_median_ms"].value("total", 0.0) - stock["stage_median_ms"].value("doors", 0.0)
+                                  : std::nan("");
+      std::printf("%-15s %10s %10s %11s %9s   (doors: the same code in both)\n", "total w/o doors", fmt("%.1f", a).c_str(),
+                  fmt("%.1f", b).c_str(), fmt("%.3f", a / b).c_str(), fmt("%.1fx", b / a).c_str());
+    }
     auto mem = [&](const json& j) {
       const double extra = j["peak_extra_kb"].get<double>() / 1024.0;
       return fmt("%.0f", j["peak_rss_kb"].get<double>() / 1024.0) + " MB peak RSS, " + fmt("%.0f", extra) +
@@ -428,8 +439,8 @@ int main(int argc, char** argv) {
 
   // Summary and the n log n curve over the laser sizes.
   std::printf("\n== summary (total ms, median) ==\n");
-  std::printf("%-15s %10s %10s %11s %9s %14s %14s\n", "case", "ours", "stock", "ours/stock", "speed-up", "ours mem/in",
-              "stock mem/in");
+  std::printf("%-15s %10s %10s %11s %9s %16s %14s %14s\n", "case", "ours", "stock", "ours/stock", "speed-up",
+              "w/o doors: s-up", "ours mem/in", "stock mem/in");
   json curve = json::array();
   double ref_ours = 0, ref_stock = 0;
   for (const auto& r : results) {
@@ -440,8 +451,11 @@ int main(int argc, char** argv) {
     const double in_kb = r["input_bytes"].get<double>() / 1024.0;
     const double ma = r["ours"]["peak_extra_kb"].get<double>() / in_kb;
     const double mb = hs ? r["stock"]["peak_extra_kb"].get<double>() / in_kb : std::nan("");
-    std::printf("%-15s %10.1f %10s %11s %9s %14s %14s\n", r["case"].get<std::string>().c_str(), a, fmt("%.1f", b).c_str(),
-                fmt("%.3f", a / b).c_str(), fmt("%.1fx", b / a).c_str(), fmt("%.2fx", ma).c_str(), fmt("%.2fx", mb).c_str());
+    const double ad = a - r["ours"]["stage_median_ms"].value("doors", 0.0);
+    const double bd = hs ? b - r["stock"]["stage_median_ms"].value("doors", 0.0) : std::nan("");
+    std::printf("%-15s %10.1f %10s %11s %9s %16s %14s %14s\n", r["case"].get<std::string>().c_str(), a, fmt("%.1f", b).c_str(),
+                fmt("%.3f", a / b).c_str(), fmt("%.1fx", b / a).c_str(), fmt("%.1fx", bd / ad).c_str(),
+                fmt("%.2fx", ma).c_str(), fmt("%.2fx", mb).c_str());
     if (r["sensor"] == "tls") {
       const double n = r["ours"]["points_in"].get<double>();
       const double nlogn = n * std::log2(n);
@@ -451,6 +465,24 @@ int main(int argc, char** argv) {
                        {"stock_per_nlogn_rel", hs && std::isfinite(ref_stock) ? json(b / nlogn / ref_stock) : json(nullptr)}});
     }
   }
+  // Peak memory above the input held, fitted as fixed + slope * input bytes
+  // over the laser sizes (least squares).
+  json memfit = json::object();
+  for (const std::string impl : {"ours", "stock"}) {
+    std::vector<std::pair<double, double>> xy;  // input MB, extra MB
+    for (const auto& r : results)
+      if (r.value("sensor", "") == "tls" && r[impl].contains("peak_extra_kb"))
+        xy.push_back({r["input_bytes"].get<double>() / 1048576.0, r[impl]["peak_extra_kb"].get<double>() / 1024.0});
+    if (xy.size() < 2) continue;
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    for (const auto& q : xy) sx += q.first, sy += q.second, sxx += q.first * q.first, sxy += q.first * q.second;
+    const double m = static_cast<double>(xy.size());
+    const double slope = (m * sxy - sx * sy) / (m * sxx - sx * sx), fixed = (sy - slope * sx) / m;
+    memfit[impl] = {{"fixed_mb", fixed}, {"slope_x_input", slope}};
+    std::printf("memory %-5s: peak above the input held ~ %.0f MB + %.2f x input (least squares over the laser sizes)\n",
+                impl.c_str(), fixed, slope);
+  }
+
   std::printf("\n== cost against n log n (laser rooms; time / (n log2 n), relative to the smallest size; <= 1 is no worse than n log n) ==\n");
   std::printf("%12s %10s %10s %10s %10s\n", "points", "ours ms", "ours rel", "stock ms", "stock rel");
   for (const auto& c : curve)
@@ -480,6 +512,7 @@ int main(int argc, char** argv) {
 
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   json out = {{"date", date},
+              {"note", opt.note},
               {"machine", machine},
               {"runs", opt.runs},
               {"baseline_runs", opt.baseline_runs},
@@ -487,6 +520,7 @@ int main(int argc, char** argv) {
               {"skip_baseline_above", opt.skip_baseline_above},
               {"cases", results},
               {"nlogn_curve", curve},
+              {"memory_fit", memfit},
               {"accuracy_sweeps", sweeps},
               {"bench_seconds", wall_s}};
   std::ofstream f(opt.json_path);
