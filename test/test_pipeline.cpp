@@ -145,14 +145,11 @@ TEST(Recognition, BoundaryPointsLieOnTheEdgesOfAPlane) {
   segmentation::Points pts;
   for (int i = 0; i <= 30; ++i)
     for (int j = 0; j <= 20; ++j) pts.emplace_back(i * 0.02f, j * 0.02f, 0.0f);
-  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
-  for (const auto& p : pts) cloud->push_back({p.x(), p.y(), p.z()});
-  segmentation::Tree tree;
-  tree.setInputCloud(cloud);
-  const segmentation::Normals n = segmentation::estimateNormals(pts, tree, 16, Eigen::Vector3f(0, 0, 1));
+  const segmentation::NeighbourGrid grid(pts, 0.025f);
+  const segmentation::Normals n = segmentation::estimateNormals(pts, grid, 16, Eigen::Vector3f(0, 0, 1));
   std::vector<int> all(pts.size());
   for (std::size_t i = 0; i < pts.size(); ++i) all[i] = static_cast<int>(i);
-  const auto flags = recognition::boundaryPoints(pts, n, tree, all, 16, 90.0);
+  const auto flags = recognition::boundaryPoints(pts, n, grid, 0.05f, all, 16, 90.0);
   int edge_hits = 0, edges = 0, interior_hits = 0;
   for (std::size_t i = 0; i < pts.size(); ++i) {
     const int a = static_cast<int>(std::lround(pts[i].x() / 0.02f)), b = static_cast<int>(std::lround(pts[i].y() / 0.02f));

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <exception>
 #include <cmath>
 #include <stdexcept>
 
@@ -50,13 +51,21 @@ struct Stopwatch {
   void total() { out->push_back({"total", std::chrono::duration<double, std::milli>(Clock::now() - start).count()}); }
 };
 
-segmentation::Tree buildTree(const segmentation::Points& pts) {
-  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
-  cloud->resize(pts.size());
-  for (std::size_t i = 0; i < pts.size(); ++i) (*cloud)[i] = pcl::PointXYZ(pts[i].x(), pts[i].y(), pts[i].z());
-  segmentation::Tree tree;
-  if (!pts.empty()) tree.setInputCloud(cloud);
-  return tree;
+// f(0) ... f(n - 1) over the cores (OpenMP), each at most once; the first
+// exception thrown is rethrown here (none may escape an OpenMP region).
+template <class F>
+void parallelFor(std::size_t n, F f) {
+  std::exception_ptr error;
+#pragma omp parallel for schedule(dynamic, 1)
+  for (long long i = 0; i < static_cast<long long>(n); ++i) {
+    try {
+      f(static_cast<std::size_t>(i));
+    } catch (...) {
+#pragma omp critical(dsr_parallel_for_error)
+      if (!error) error = std::current_exception();
+    }
+  }
+  if (error) std::rethrow_exception(error);
 }
 
 }  // namespace
@@ -72,46 +81,53 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   res.points_in = cloud.size();
   const bool organized = cloud.height > 1;  // a camera frame: no return means nothing in range
 
-  // --- preprocess: sanitise, level, downsample --------------------------------
-  preprocess::Points raw = preprocess::sanitize(cloud, p.max_abs_coordinate);
-  if (raw.size() < cloud.size())
-    res.warnings.push_back(std::to_string(cloud.size() - raw.size()) + " non-finite or out-of-range points dropped");
-  std::optional<Eigen::Vector3d> up = preprocess::parseUpAxis(p.up_axis);
+  // --- preprocess: sanitise, downsample ---------------------------------------
+  preprocess::Points thinned;
   {
-    // Normals of a coarse copy serve to estimate or to refine the up axis.
-    const preprocess::Points coarse = preprocess::voxelDownsample(raw, 0.05);
-    if (coarse.size() >= 50) {
-      const segmentation::Tree tree = buildTree(coarse);
-      const segmentation::Normals nn = segmentation::estimateNormals(coarse, tree, p.normal_k, viewpoint_in.cast<float>());
-      if (!up) {
-        up = preprocess::estimateUp(coarse, nn.n, static_cast<unsigned>(p.random_seed));
-        if (up) up = preprocess::refineUp(*up, nn.n, 10.0);
-      } else if (p.refine_up_deg > 0) {
-        up = preprocess::refineUp(*up, nn.n, p.refine_up_deg);
-      }
-    }
-    if (!up) {
-      res.warnings.push_back("up axis could not be estimated; using +z");
-      up = Eigen::Vector3d::UnitZ();
-    }
+    const preprocess::Points raw = preprocess::sanitize(cloud, p.max_abs_coordinate);
+    if (raw.size() < cloud.size())
+      res.warnings.push_back(std::to_string(cloud.size() - raw.size()) + " non-finite or out-of-range points dropped");
+    thinned = preprocess::voxelDownsample(raw, p.voxel_size);
   }
-  res.up = up->normalized();
-  const Eigen::Matrix3f R = preprocess::levellingRotation(res.up).cast<float>();
-  for (auto& q : raw) q = R * q;
-  const preprocess::Points pts = preprocess::voxelDownsample(raw, p.voxel_size);
-  res.points_used = pts.size();
+  res.points_used = thinned.size();
   watch.mark("preprocess");
-  if (pts.size() < 20) {
+  if (thinned.size() < 20) {
     res.warnings.push_back("too few points to find walls");
     watch.total();
     return res;
   }
 
-  // --- segmentation -----------------------------------------------------------
-  const Eigen::Vector3f viewpoint = R * viewpoint_in.cast<float>();  // levelled
-  const segmentation::Tree tree = buildTree(pts);
-  const segmentation::Normals normals = segmentation::estimateNormals(pts, tree, p.normal_k, viewpoint);
+  // --- normals: one neighbour grid serves normals and region growing ---------
+  // Cells of 2 voxels: a neighbourhood of 3 x 3 x 3 cells, 6 voxels wide,
+  // holds normal_k points or more of a surface thinned to the voxel size even
+  // where the scan is sparser than the voxel grid.
+  const segmentation::NeighbourGrid grid(thinned, static_cast<float>(2.0 * std::max(p.voxel_size, 0.01)));
+  segmentation::Normals normals = segmentation::estimateNormals(thinned, grid, p.normal_k, viewpoint_in.cast<float>());
   watch.mark("normals");
+
+  // --- levelling: the up axis given (and refined) or estimated ---------------
+  std::optional<Eigen::Vector3d> up = preprocess::parseUpAxis(p.up_axis);
+  if (!up) {
+    up = preprocess::estimateUp(thinned, normals.n, static_cast<unsigned>(p.random_seed));
+    if (up) up = preprocess::refineUp(*up, normals.n, 10.0);
+  } else if (p.refine_up_deg > 0) {
+    up = preprocess::refineUp(*up, normals.n, p.refine_up_deg);
+  }
+  if (!up) {
+    res.warnings.push_back("up axis could not be estimated; using +z");
+    up = Eigen::Vector3d::UnitZ();
+  }
+  res.up = up->normalized();
+  const Eigen::Matrix3f R = preprocess::levellingRotation(res.up).cast<float>();
+  preprocess::Points pts(thinned.size());
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    pts[i] = R * thinned[i];
+    normals.n[i] = R * normals.n[i];
+  }
+  const Eigen::Vector3f viewpoint = R * viewpoint_in.cast<float>();
+  watch.mark("level");
+
+  // --- segmentation -----------------------------------------------------------
   const segmentation::FloorCeiling fc = segmentation::findFloorCeiling(pts, normals, p, viewpoint.z());
   res.floor = fc.floor;
   res.ceiling = fc.ceiling;
@@ -151,12 +167,34 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   auto onFloor = [&](const Eigen::Vector2d& xy) { return Eigen::Vector3d(xy.x(), xy.y(), floor_z); };
   std::vector<char> is_leaf(pts.size(), 0), is_wall(pts.size(), 0);
   std::vector<reconstruction::Opening> openings;
-  for (std::size_t wi = 0; wi < walls.size(); ++wi) {
-    const segmentation::WallPlane& wall = walls[wi];
+  // The doorways of each wall, then the leaf in each doorway: independent
+  // searches, run over both cores; decisions follow in wall and doorway order.
+  std::vector<std::vector<recognition::Doorway>> doorways(walls.size());
+  parallelFor(walls.size(), [&](std::size_t wi) {
+    doorways[wi] = recognition::findDoorways(pts, walls[wi], floor_z, top_z, viewpoint, p, organized);
+  });
+  struct Candidate {
+    std::size_t wall;
+    recognition::Doorway doorway;
+    state::LeafFit leaf;
+  };
+  std::vector<Candidate> candidates;
+  for (std::size_t wi = 0; wi < walls.size(); ++wi)
+    for (const recognition::Doorway& d : doorways[wi]) candidates.push_back({wi, d, {}});
+  auto thicknessOf = [&](const recognition::Doorway& d) { return d.thickness > 0.04 ? d.thickness : p.default_wall_thickness; };
+  parallelFor(candidates.size(), [&](std::size_t i) {
+    Candidate& c = candidates[i];
+    c.leaf = state::fitLeaf(pts, walls[c.wall], c.doorway, floor_z, thicknessOf(c.doorway), viewpoint, p);
+  });
+  for (const segmentation::WallPlane& wall : walls)
     for (int i : wall.inliers) is_wall[i] = 1;
-    for (const recognition::Doorway& d : recognition::findDoorways(pts, wall, floor_z, top_z, viewpoint, p, organized)) {
-      const double t = d.thickness > 0.04 ? d.thickness : p.default_wall_thickness;
-      const state::LeafFit leaf = state::fitLeaf(pts, wall, d, floor_z, t, viewpoint, p);
+  for (const Candidate& cand : candidates) {
+    {
+      const std::size_t wi = cand.wall;
+      const segmentation::WallPlane& wall = walls[wi];
+      const recognition::Doorway& d = cand.doorway;
+      const double t = thicknessOf(d);
+      const state::LeafFit& leaf = cand.leaf;
       if (!leaf.found) {
         char buf[400];
         std::snprintf(buf, sizeof buf,
@@ -243,7 +281,7 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
                                  (std::abs(pts[i].z() - floor_z) < 0.05 || (fc.ceiling && std::abs(pts[i].z() - top_z) < 0.05));
     mask[i] = !horizontal_slab && !is_wall[i] && !is_leaf[i];
   }
-  const auto regions = segmentation::growRegions(pts, normals, tree, mask, p);
+  const auto regions = segmentation::growRegions(pts, normals, grid, mask, p);
   for (const auto& region : regions) {
     const recognition::BoxCorners box = recognition::boundingBox(pts, region);
     SegmentResult seg;

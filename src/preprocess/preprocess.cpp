@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <unordered_map>
 
+#include "door_state_recognition/preprocess/cell_map.hpp"
+
 namespace dsr {
 namespace preprocess {
 
@@ -38,34 +40,24 @@ Points sanitize(const pcl::PointCloud<pcl::PointXYZ>& cloud, double max_abs) {
 
 Points voxelDownsample(const Points& points, double leaf) {
   if (leaf <= 0 || points.empty()) return points;
-  struct Acc {
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    int n = 0;
-    std::size_t first = 0;
-  };
-  auto key = [leaf](const Eigen::Vector3f& p) {
-    const auto c = [leaf](float v) { return static_cast<std::int64_t>(std::floor(v / leaf)); };
-    const std::uint64_t x = static_cast<std::uint64_t>(c(p.x())), y = static_cast<std::uint64_t>(c(p.y())),
-                        z = static_cast<std::uint64_t>(c(p.z()));
-    // 21 bits an axis: coordinates are bounded by max_abs_coordinate / leaf
-    // (checked by the caller), wrap-around only merges far-apart voxels.
-    return (x & 0x1FFFFF) | ((y & 0x1FFFFF) << 21) | ((z & 0x1FFFFF) << 42);
-  };
-  std::unordered_map<std::uint64_t, Acc> cells;
-  cells.reserve(points.size() / 2);
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    Acc& a = cells[key(points[i])];
-    if (a.n == 0) a.first = i;
-    a.sum += points[i].cast<double>();
-    ++a.n;
+  // Cells numbered in order of first occurrence: the output keeps the input's order.
+  const double inv = 1.0 / leaf;
+  CellMap cells(std::min<std::size_t>(points.size(), 1 << 16));
+  std::vector<Eigen::Vector3d> sum;
+  std::vector<int> count;
+  for (const auto& p : points) {
+    const Eigen::Vector3i c = cellOf(p, inv);
+    const std::uint32_t id = cells.insert(packCell(c.x(), c.y(), c.z()));
+    if (id == sum.size()) {
+      sum.push_back(p.cast<double>());
+      count.push_back(1);
+    } else {
+      sum[id] += p.cast<double>();
+      ++count[id];
+    }
   }
-  std::vector<const Acc*> order;
-  order.reserve(cells.size());
-  for (const auto& kv : cells) order.push_back(&kv.second);
-  std::sort(order.begin(), order.end(), [](const Acc* a, const Acc* b) { return a->first < b->first; });
-  Points out;
-  out.reserve(order.size());
-  for (const Acc* a : order) out.push_back((a->sum / a->n).cast<float>());
+  Points out(sum.size());
+  for (std::size_t i = 0; i < sum.size(); ++i) out[i] = (sum[i] / count[i]).cast<float>();
   return out;
 }
 
@@ -76,7 +68,10 @@ std::optional<Eigen::Vector3d> estimateUp(const Points& points, const Points& no
   std::mt19937 rng(seed);
   std::uniform_int_distribution<std::size_t> pick(0, points.size() - 1);
   std::vector<Eigen::Vector3f> cand;
-  for (int i = 0; i < 200; ++i) cand.push_back(normals[pick(rng)]);
+  for (int i = 0; i < 200; ++i) {
+    const Eigen::Vector3f& n = normals[pick(rng)];
+    if (n.norm() > 0.5f) cand.push_back(n);  // isolated points have none
+  }
   for (int i = 0; i < 200; ++i) {
     const Eigen::Vector3f c = normals[pick(rng)].cross(normals[pick(rng)]);
     if (c.norm() > 0.5f) cand.push_back(c.normalized());

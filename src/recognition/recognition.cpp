@@ -50,25 +50,31 @@ BoxCorners boundingBox(const Points& points, const std::vector<int>& idx) {
 }
 
 std::vector<char> boundaryPoints(const Points& points, const segmentation::Normals& normals,
-                                 const segmentation::Tree& tree, const std::vector<int>& indices, int k,
-                                 double angle_deg) {
+                                 const segmentation::NeighbourGrid& grid, float radius,
+                                 const std::vector<int>& indices, int k, double angle_deg) {
   std::vector<char> out(indices.size(), 0);
   const double thr = angle_deg * M_PI / 180.0;
-  const int kk = std::min<int>(k, static_cast<int>(points.size()));
-  if (kk < 3) return out;
-  std::vector<int> nb(kk);
-  std::vector<float> dist(kk);
+  if (k < 3) return out;
+  std::vector<int> within;
+  std::vector<float> d2;
+  std::vector<std::pair<float, int>> near;
   std::vector<double> angles;
   for (std::size_t j = 0; j < indices.size(); ++j) {
     const int i = indices[j];
     const Eigen::Vector3d p = points[i].cast<double>(), n = normals.n[i].cast<double>();
     // Tangent basis (u, v) of the plane perpendicular to n.
     Eigen::Vector3d u = n.unitOrthogonal(), v = n.cross(u);
-    const int found = tree.nearestKSearch(pcl::PointXYZ(points[i].x(), points[i].y(), points[i].z()), kk, nb, dist);
+    // The k nearest within the radius.
+    grid.within(i, radius, within, d2);
+    near.clear();
+    for (std::size_t m = 0; m < within.size(); ++m) near.push_back({d2[m], within[m]});
+    if (static_cast<int>(near.size()) > k - 1) {
+      std::nth_element(near.begin(), near.begin() + (k - 1), near.end());
+      near.resize(k - 1);
+    }
     angles.clear();
-    for (int m = 0; m < found; ++m) {
-      if (nb[m] == i) continue;
-      const Eigen::Vector3d d = points[nb[m]].cast<double>() - p;
+    for (const auto& nb : near) {
+      const Eigen::Vector3d d = points[nb.second].cast<double>() - p;
       const Eigen::Vector3d proj = d - d.dot(n) * n;  // onto the tangent plane
       if (proj.squaredNorm() < 1e-12) continue;
       angles.push_back(std::atan2(proj.dot(v), proj.dot(u)));
@@ -117,6 +123,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   const int rows = std::max(1, static_cast<int>(std::ceil(z_span / row_h)));
   if (cols > 20000) return {};
   std::vector<Cell> grid(static_cast<std::size_t>(cols) * rows);
+  std::vector<int> front_diff(static_cast<std::size_t>(cols + 1) * (rows + 1), 0);
   // Trim is sought on sub-columns of half a cell, summed over the body.
   const int sub = 2 * cols;
   std::vector<int> face_d_out(sub, 0), face_d_n(sub, 0);
@@ -178,13 +185,29 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     if (d < 0) {
       if (Cell* c = cellAt(s, x.z())) (d < -0.3 ? c->through : c->recess)++;
     } else {
-      // An occluder shadows a patch that grows with lambda.
+      // An occluder shadows a patch that grows with lambda: a rectangle of
+      // cells, added to a difference array (summed once below).
       const int r = std::min(5, static_cast<int>(std::ceil(0.5 * footprint * lambda / cell)));
-      for (int dc = -r; dc <= r; ++dc)
-        for (int dr = -r; dr <= r; ++dr)
-          if (Cell* c = cellAt(s + dc * cell, x.z() + dr * cell)) ++c->front;
+      const int c = static_cast<int>(std::floor((s - s_lo) / cell));
+      const int r0 = static_cast<int>(std::floor((x.z() - r * cell - floor_z) / row_h));
+      const int r1 = static_cast<int>(std::floor((x.z() + r * cell - floor_z) / row_h));
+      const int ca = std::max(0, c - r), cb = std::min(cols - 1, c + r), ra = std::max(0, r0), rb = std::min(rows - 1, r1);
+      if (ca > cb || ra > rb) continue;
+      front_diff[static_cast<std::size_t>(ra) * (cols + 1) + ca] += 1;
+      front_diff[static_cast<std::size_t>(ra) * (cols + 1) + cb + 1] -= 1;
+      front_diff[static_cast<std::size_t>(rb + 1) * (cols + 1) + ca] -= 1;
+      front_diff[static_cast<std::size_t>(rb + 1) * (cols + 1) + cb + 1] += 1;
     }
   }
+  // Occluder shadows: 2-D prefix sums of the difference array.
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c) {
+      const std::size_t i = static_cast<std::size_t>(r) * (cols + 1) + c;
+      if (r > 0) front_diff[i] += front_diff[i - (cols + 1)];
+      if (c > 0) front_diff[i] += front_diff[i - 1];
+      if (r > 0 && c > 0) front_diff[i] -= front_diff[i - (cols + 1) - 1];
+      grid[static_cast<std::size_t>(r) * cols + c].front = front_diff[i];
+    }
 
   // Column shares over the body of a door.
   const int body0 = static_cast<int>(0.25 / row_h), body1 = std::min(rows, static_cast<int>(1.75 / row_h));

@@ -8,35 +8,63 @@
 namespace dsr {
 namespace segmentation {
 
-Normals estimateNormals(const Points& points, const Tree& tree, int k, const Eigen::Vector3f& viewpoint) {
+Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, const Eigen::Vector3f& viewpoint) {
   Normals out;
-  out.n.assign(points.size(), Eigen::Vector3f::UnitZ());
+  out.n.assign(points.size(), Eigen::Vector3f::Zero());
   out.curvature.assign(points.size(), 1.0f);
-  const int kk = std::min<int>(k, static_cast<int>(points.size()));
-  if (kk < 3) return out;
+  if (points.size() < 3 || k < 3) return out;
+  // Moments of every cell, once: count, sum and sum of outer products, taken
+  // about the cell's first point (numerically safe far from the origin).
+  struct Moments {
+    double n = 0;
+    Eigen::Vector3d s = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d ss = Eigen::Matrix3d::Zero();
+  };
+  const std::size_t cells = grid.cells();
+  std::vector<Moments> m(cells);
+  std::vector<Eigen::Vector3d> origin(cells);
+#pragma omp parallel for schedule(static, 1024)
+  for (long long c = 0; c < static_cast<long long>(cells); ++c) {
+    origin[c] = grid.point(*grid.cellBegin(c)).cast<double>();
+    for (const int* it = grid.cellBegin(c); it != grid.cellEnd(c); ++it) {
+      const Eigen::Vector3d d = grid.point(*it).cast<double>() - origin[c];
+      m[c].n += 1;
+      m[c].s += d;
+      m[c].ss += d * d.transpose();
+    }
+  }
+  const int need = std::min(k, 8);
 #pragma omp parallel
   {
-    std::vector<int> idx(kk);
-    std::vector<float> dist(kk);
-#pragma omp for schedule(static, 1024)
-    for (long long i = 0; i < static_cast<long long>(points.size()); ++i) {
-      pcl::PointXYZ q(points[i].x(), points[i].y(), points[i].z());
-      const int found = tree.nearestKSearch(q, kk, idx, dist);
-      if (found < 3) continue;
-      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-      for (int j = 0; j < found; ++j) mean += points[idx[j]].cast<double>();
-      mean /= found;
-      Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-      for (int j = 0; j < found; ++j) {
-        const Eigen::Vector3d d = points[idx[j]].cast<double>() - mean;
-        C += d * d.transpose();
+    std::vector<std::uint32_t> block;
+#pragma omp for schedule(dynamic, 256)
+    for (long long c = 0; c < static_cast<long long>(cells); ++c) {
+      // PCA of the 3 x 3 x 3 cells around; 5 x 5 x 5 where that is sparse.
+      Moments acc;
+      for (int ring = 1; ring <= 2; ++ring) {
+        grid.neighbourCells(static_cast<std::size_t>(c), ring, block);
+        acc = Moments();
+        for (std::uint32_t o : block) {
+          const Eigen::Vector3d t = origin[o] - origin[c];  // shift o's moments to c's origin
+          acc.n += m[o].n;
+          acc.s += m[o].s + m[o].n * t;
+          acc.ss += m[o].ss + m[o].s * t.transpose() + t * m[o].s.transpose() + m[o].n * t * t.transpose();
+        }
+        if (acc.n >= need) break;
       }
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
-      Eigen::Vector3f n = es.eigenvectors().col(0).cast<float>();
-      if (n.dot(viewpoint - points[i]) < 0) n = -n;
-      out.n[i] = n;
+      if (acc.n < 3) continue;  // isolated: no normal (zero), curvature 1
+      const Eigen::Vector3d mean = acc.s / acc.n;
+      const Eigen::Matrix3d C = acc.ss / acc.n - mean * mean.transpose();
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
+      es.computeDirect(C);
+      const Eigen::Vector3f n = es.eigenvectors().col(0).cast<float>().normalized();
+      if (!n.allFinite()) continue;
       const double sum = es.eigenvalues().sum();
-      out.curvature[i] = sum > 0 ? static_cast<float>(es.eigenvalues()(0) / sum) : 0.0f;
+      const float curv = sum > 0 ? static_cast<float>(std::max(0.0, es.eigenvalues()(0)) / sum) : 0.0f;
+      for (const int* it = grid.cellBegin(c); it != grid.cellEnd(c); ++it) {
+        out.n[*it] = n.dot(viewpoint - points[*it]) < 0 ? Eigen::Vector3f(-n) : n;
+        out.curvature[*it] = curv;
+      }
     }
   }
   return out;
@@ -111,7 +139,11 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
     std::size_t best_count = 0;
     Eigen::Vector2d best_pt, best_n;
     const std::size_t stride = std::max<std::size_t>(1, pool.size() / 20000);
-    for (int it = 0; it < p.ransac_iterations; ++it) {
+    const double sampled = static_cast<double>((pool.size() + stride - 1) / stride);
+    // Adaptive: stop once a plane larger than the best would have been drawn
+    // with probability 0.999 (capped by ransac_iterations).
+    int needed = p.ransac_iterations;
+    for (int it = 0; it < std::min(needed, p.ransac_iterations); ++it) {
       const int s = pool[pick(rng)];
       Eigen::Vector2d n(normals.n[s].x(), normals.n[s].y());
       if (n.norm() < 0.5) continue;
@@ -125,7 +157,11 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
             std::abs(n.x() * normals.n[i].x() + n.y() * normals.n[i].y()) > p.wall_normal_agreement)
           ++count;
       }
-      if (count > best_count) best_count = count, best_pt = q, best_n = n;
+      if (count > best_count) {
+        best_count = count, best_pt = q, best_n = n;
+        const double w = std::min(0.999, best_count / sampled);
+        needed = std::max(20, static_cast<int>(std::ceil(std::log(0.001) / std::log(1.0 - w))));
+      }
     }
     if (best_count * stride < static_cast<std::size_t>(p.min_wall_points)) break;
     // Refine twice by TLS on the inliers.
@@ -204,40 +240,55 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
   return walls;
 }
 
-std::vector<std::vector<int>> growRegions(const Points& points, const Normals& normals, const Tree& tree,
+std::vector<std::vector<int>> growRegions(const Points& points, const Normals& normals, const NeighbourGrid& grid,
                                          const std::vector<char>& mask, const Parameters& p) {
+  // Cell by cell: the points of a grid cell share one normal (estimateNormals),
+  // so regions grow over neighbouring cells with agreeing normals.
   const float cos_thr = static_cast<float>(std::cos(p.region_angle_deg * M_PI / 180.0));
+  const std::size_t cells = grid.cells();
+  std::vector<char> live(cells, 0);
+  std::vector<Eigen::Vector3f> cn(cells);
+  std::vector<float> curv(cells, 1.0f);
   std::vector<int> order;
-  for (std::size_t i = 0; i < points.size(); ++i)
-    if (mask[i]) order.push_back(static_cast<int>(i));
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return normals.curvature[a] < normals.curvature[b]; });
-  std::vector<int> label(points.size(), -1);
+  for (std::size_t c = 0; c < cells; ++c) {
+    const int first = *grid.cellBegin(c);
+    cn[c] = normals.n[first];
+    curv[c] = normals.curvature[first];
+    for (const int* it = grid.cellBegin(c); it != grid.cellEnd(c); ++it) live[c] |= mask[*it] != 0;
+    if (live[c] && curv[c] <= p.region_curvature && cn[c].squaredNorm() > 0.25f) order.push_back(static_cast<int>(c));
+  }
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return curv[a] < curv[b]; });
+  std::vector<int> label(cells, -1);
   std::vector<std::vector<int>> regions;
-  const int k = std::min<int>(p.normal_k, static_cast<int>(points.size()));
-  std::vector<int> idx(k);
-  std::vector<float> dist(k);
+  std::vector<std::uint32_t> nbs;
+  std::vector<int> members, stack, region;
   for (int seed : order) {
-    if (label[seed] >= 0 || normals.curvature[seed] > p.region_curvature) continue;
-    std::vector<int> region{seed}, stack{seed};
-    label[seed] = static_cast<int>(regions.size());
+    if (label[seed] != -1) continue;
+    const int id = static_cast<int>(regions.size());
+    members.assign(1, seed);
+    stack.assign(1, seed);
+    label[seed] = id;
     while (!stack.empty()) {
       const int cur = stack.back();
       stack.pop_back();
-      pcl::PointXYZ q(points[cur].x(), points[cur].y(), points[cur].z());
-      const int found = tree.nearestKSearch(q, k, idx, dist);
-      for (int j = 0; j < found; ++j) {
-        const int nb = idx[j];
-        if (!mask[nb] || label[nb] >= 0) continue;
-        if (std::abs(normals.n[cur].dot(normals.n[nb])) < cos_thr) continue;
-        label[nb] = label[seed];
-        region.push_back(nb);
-        if (normals.curvature[nb] <= p.region_curvature) stack.push_back(nb);
+      grid.neighbourCells(static_cast<std::size_t>(cur), 1, nbs);
+      for (std::uint32_t nb : nbs) {
+        if (!live[nb] || label[nb] != -1) continue;
+        if (std::abs(cn[cur].dot(cn[nb])) < cos_thr) continue;
+        label[nb] = id;
+        members.push_back(static_cast<int>(nb));
+        if (curv[nb] <= p.region_curvature) stack.push_back(static_cast<int>(nb));
       }
     }
+    region.clear();
+    for (int c : members)
+      for (const int* it = grid.cellBegin(c); it != grid.cellEnd(c); ++it)
+        if (mask[*it]) region.push_back(*it);
     if (static_cast<int>(region.size()) >= p.min_region_points) {
-      regions.push_back(std::move(region));
+      std::sort(region.begin(), region.end());
+      regions.push_back(region);
     } else {
-      for (int i : region) label[i] = -2;  // too small: never reused as a seed
+      for (int c : members) label[c] = -2;  // too small: never reused as a seed
     }
   }
   return regions;

@@ -28,6 +28,21 @@ DoorStateKind classify(double angle_deg, const Parameters& p) {
 
 namespace {
 
+// atan2 in degrees to within 0.001 deg (a minimax polynomial on [0, 1]);
+// the angle index widens every arc by kBearingSlackDeg to stay exact.
+double fastAtan2Deg(double y, double x) {
+  const double ax = std::abs(x), ay = std::abs(y);
+  const double mx = std::max(ax, ay);
+  if (mx == 0) return 0;
+  const double t = std::min(ax, ay) / mx, t2 = t * t;
+  double a = t * (0.9998660 + t2 * (-0.3302995 + t2 * (0.1801410 + t2 * (-0.0851330 + 0.0208351 * t2))));
+  if (ay > ax) a = M_PI / 2 - a;
+  if (x < 0) a = M_PI - a;
+  if (y < 0) a = -a;
+  return a * (180 / M_PI);
+}
+constexpr double kBearingSlackDeg = 0.01;
+
 struct Local {  // a point in wall coordinates: s along, d towards the viewer
   double s, d;
   int zbin, index;
@@ -111,14 +126,86 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   // swing side m, angle th. Support (cells holding points) against
   // contradiction (cells rays went through), with the best leaf length: the
   // shortest reaching the largest sum of support minus twice contradiction.
-  auto evaluate = [&](double s_h, double d_h, double e0, double m, double th) {
+  // Which points and rays can touch a leaf at each angle of a set: for one
+  // hinge and swing, a point lies within the leaf's band only for angles
+  // near its own bearing from the hinge, and a ray crosses the leaf only for
+  // angles within the arc its chord subtends. Bucketing them by angle once
+  // per hinge makes each hypothesis test only what can touch it (the exact
+  // test below is unchanged, so the result is the same as testing all).
+  struct AngleIndex {
+    double start = 0, step = 1;
+    int count = 0;
+    std::vector<std::vector<int>> pts, rays;
+  } index;
+  const double band_hw = lt + tol;  // farthest a supporting point lies off the hinge line
+  const double r_pts = std::hypot(Lmax, band_hw), r_rays = std::hypot(Lmax, lt / 2);
+  auto addArc = [&](std::vector<std::vector<int>>& buckets, int id, double lo, double hi) {
+    // Every angle start + i step within [lo, hi] degrees, modulo 360.
+    for (double shift = -360; shift <= 360; shift += 360) {
+      const double a = lo + shift, b = hi + shift;
+      const int i0 = std::max(0, static_cast<int>(std::ceil((a - index.start) / index.step - 1e-9)));
+      const int i1 = std::min(index.count - 1, static_cast<int>(std::floor((b - index.start) / index.step + 1e-9)));
+      for (int i = i0; i <= i1; ++i) buckets[i].push_back(id);
+    }
+  };
+  auto buildIndex = [&](double s_h, double d_h, double e0, double m, double start_deg, double step_deg, int count) {
+    index.start = start_deg;
+    index.step = step_deg;
+    index.count = count;
+    index.pts.resize(count);
+    index.rays.resize(count);
+    for (auto& b : index.pts) b.clear();
+    for (auto& b : index.rays) b.clear();
+    const Eigen::Vector2d H(s_h, d_h);
+    auto bearing = [&](const Eigen::Vector2d& r) { return fastAtan2Deg(m * r.y(), e0 * r.x()); };
+    for (std::size_t j = 0; j < pts.size(); ++j) {
+      const Eigen::Vector2d r(pts[j].s - s_h, pts[j].d - d_h);
+      const double rho = r.norm();
+      if (rho > r_pts) continue;
+      if (rho <= band_hw) {
+        addArc(index.pts, static_cast<int>(j), -360, 360);
+        continue;
+      }
+      const double c = bearing(r), dl = std::asin(band_hw / rho) * 180 / M_PI + kBearingSlackDeg;
+      addArc(index.pts, static_cast<int>(j), c - dl, c + dl);
+    }
+    for (std::size_t j = 0; j < rays.size(); ++j) {
+      const Ray& ray = rays[j];
+      // The part of the ray that counts: from the sensor to 6 cm before its point.
+      const Eigen::Vector2d A = ray.v, B = ray.q - (0.06 / ray.len) * (ray.q - ray.v);
+      const Eigen::Vector2d u = B - A, w0 = A - H;
+      const double uu = u.squaredNorm();
+      if (uu < 1e-12) continue;
+      // Chord within the disc the leaf's mid-line can reach.
+      const double bq = w0.dot(u), cq = w0.squaredNorm() - r_rays * r_rays, disc = bq * bq - uu * cq;
+      if (disc <= 0) continue;
+      const double sq = std::sqrt(disc);
+      const double t0 = std::max(0.0, (-bq - sq) / uu), t1 = std::min(1.0, (-bq + sq) / uu);
+      if (t0 >= t1) continue;
+      const double tc = std::clamp(-bq / uu, t0, t1);
+      const double rho_min = (w0 + tc * u).norm();
+      if (rho_min <= std::max(0.05, lt / 2)) {
+        addArc(index.rays, static_cast<int>(j), -360, 360);
+        continue;
+      }
+      const double c0 = bearing(w0 + t0 * u), c1 = bearing(w0 + t1 * u);
+      const double span = std::remainder(c1 - c0, 360.0);
+      const double lo = c0 + std::min(0.0, span), hi = lo + std::abs(span);
+      const double dl = std::asin(std::min(1.0, lt / 2 / rho_min)) * 180 / M_PI + kBearingSlackDeg;
+      addArc(index.rays, static_cast<int>(j), lo - dl, hi + dl);
+    }
+  };
+  // One hypothesis, at angle number ai of the index built for its hinge.
+  auto evaluate = [&](double s_h, double d_h, double e0, double m, int ai) {
+    const double th = (index.start + ai * index.step) * M_PI / 180;
     const Eigen::Vector2d H(s_h, d_h);
     const Eigen::Vector2d e(std::cos(th) * e0, std::sin(th) * m), k(std::sin(th) * e0, -std::cos(th) * m);
     std::fill(seen.begin(), seen.end(), 0);
     std::fill(blocked.begin(), blocked.end(), 0);
     std::fill(sup.begin(), sup.end(), 0);
     std::fill(con.begin(), con.end(), 0);
-    for (const Local& q : pts) {
+    for (int j : index.pts[ai]) {
+      const Local& q = pts[j];
       const Eigen::Vector2d r(q.s - s_h, q.d - d_h);
       const double a = r.dot(e), b = r.dot(k);
       if (a < 0.02 || a >= Lmax || b < -tol || b > lt + tol) continue;
@@ -127,7 +214,8 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       if (!f) f = 1, ++sup[ab];
     }
     const Eigen::Vector2d P = H + k * (lt / 2);  // the leaf's mid-plane
-    for (const Ray& ray : rays) {
+    for (int j : index.rays[ai]) {
+      const Ray& ray = rays[j];
       const Eigen::Vector2d r = ray.q - ray.v;
       const double denom = r.x() * e.y() - r.y() * e.x();
       if (std::abs(denom) < 1e-9) continue;
@@ -166,9 +254,11 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
         const double s_h = h == 0 ? door.s0 : door.s1, e0 = h == 0 ? 1.0 : -1.0;
         const double m = sw == 0 ? 1.0 : -1.0, d_h = sw == 0 ? -rec : -t + rec;
         // Beyond 170 deg a leaf lies flat on its wall and cannot be told from it.
-        for (int deg = 0; deg <= 170; deg += 2) {  // refined below
-          const Score sc = evaluate(s_h, d_h, e0, m, deg * M_PI / 180);
-          if (sc.score > best.score) best = sc, best_h = h, best_sw = sw, best_deg = deg, best_recess = rec, best_s = s_h;
+        buildIndex(s_h, d_h, e0, m, 0.0, 2.0, 86);  // every 2 deg, refined below
+        for (int ai = 0; ai < index.count; ++ai) {
+          const Score sc = evaluate(s_h, d_h, e0, m, ai);
+          if (sc.score > best.score)
+            best = sc, best_h = h, best_sw = sw, best_deg = 2.0 * ai, best_recess = rec, best_s = s_h;
         }
       }
   // Local search: the jamb seen from the wall can be off where a leaf hides
@@ -178,13 +268,16 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     const double d_h = best_sw == 0 ? -best_recess : -t + best_recess;
     const double s_center = best_s, deg_center = best_deg;
     const int reach_steps = door.paired ? 3 : 15;  // 2 cm steps
-    for (int ds = -reach_steps; ds <= reach_steps; ++ds)
-      for (int dd = -5; dd <= 5; ++dd) {
-        const double deg = deg_center + dd * 0.5;
+    for (int ds = -reach_steps; ds <= reach_steps; ++ds) {
+      const double s_h = s_center + ds * 0.02;
+      buildIndex(s_h, d_h, e0, m, deg_center - 2.5, 0.5, 11);
+      for (int ai = 0; ai < index.count; ++ai) {
+        const double deg = index.start + ai * index.step;
         if (deg < 0 || deg > 170) continue;
-        const Score sc = evaluate(s_center + ds * 0.02, d_h, e0, m, deg * M_PI / 180);
-        if (sc.score > best.score) best = sc, best_deg = deg, best_s = s_center + ds * 0.02;
+        const Score sc = evaluate(s_h, d_h, e0, m, ai);
+        if (sc.score > best.score) best = sc, best_deg = deg, best_s = s_h;
       }
+    }
   }
   const int best_support = best.cells, best_contra = best.contra, best_bins = best.bins;
 

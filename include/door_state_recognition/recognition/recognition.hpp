@@ -32,7 +32,8 @@ BoxCorners boundingBox(const Points& points, const std::vector<int>& indices);
 // between the projections of its k neighbours onto its tangent plane exceeds
 // angle_deg. Returns one flag per entry of `indices`.
 std::vector<char> boundaryPoints(const Points& points, const segmentation::Normals& normals,
-                                 const segmentation::Tree& tree, const std::vector<int>& indices, int k,
+                                 const segmentation::NeighbourGrid& grid, float radius,
+                                 const std::vector<int>& indices, int k,
                                  double angle_deg);
 
 struct Doorway {

@@ -4,7 +4,6 @@
 // frame (z up). ROS-free.
 #pragma once
 
-#include <pcl/kdtree/kdtree_flann.h>
 #include <pcl/point_types.h>
 
 #include <Eigen/Core>
@@ -12,20 +11,26 @@
 #include <vector>
 
 #include "door_state_recognition/pipeline/parameters.hpp"
+#include "door_state_recognition/segmentation/neighbour_grid.hpp"
 
 namespace dsr {
 namespace segmentation {
 
 using Points = std::vector<Eigen::Vector3f>;
-using Tree = pcl::KdTreeFLANN<pcl::PointXYZ>;
 
 struct Normals {
   Points n;                      // unit, oriented towards the viewpoint
   std::vector<float> curvature;  // lambda0 / (lambda0 + lambda1 + lambda2)
 };
 
-// PCA over the k nearest neighbours of every point.
-Normals estimateNormals(const Points& points, const Tree& tree, int k, const Eigen::Vector3f& viewpoint);
+// PCA normals and curvature from cell moments: every point of a grid cell
+// gets the PCA of the points in the 3 x 3 x 3 cells around it, or in the
+// 5 x 5 x 5 cells where fewer than min(k, 8) points lie in those (sparse
+// surroundings far from the sensor). `grid` must be built on `points` (or a
+// rotated copy); a cell of half the wanted neighbourhood radius gives a
+// neighbourhood about that wide. Normals point towards `viewpoint` (same
+// frame as `points`). An isolated point gets a zero normal and curvature 1.
+Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, const Eigen::Vector3f& viewpoint);
 
 struct FloorCeiling {
   std::optional<double> floor, ceiling;  // z
@@ -60,7 +65,9 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
 // grows to neighbours whose normals differ by less than region_angle_deg and
 // continues from points whose curvature is below region_curvature. Regions
 // smaller than min_region_points are dropped. Deterministic.
-std::vector<std::vector<int>> growRegions(const Points& points, const Normals& normals, const Tree& tree,
+// It grows over the cells of the grid the normals were estimated on (whose
+// points share a normal), to the 26 neighbouring cells.
+std::vector<std::vector<int>> growRegions(const Points& points, const Normals& normals, const NeighbourGrid& grid,
                                          const std::vector<char>& mask, const Parameters& p);
 
 }  // namespace segmentation

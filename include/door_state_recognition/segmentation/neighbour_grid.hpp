@@ -1,0 +1,56 @@
+// NeighbourGrid: the one search structure of the pipeline. Points are bucketed
+// in cubic cells of edge `cell`; a query visits the 27 cells around it (or
+// 125 for a radius up to twice the cell). Built in O(n) with a flat hash, it
+// replaces a k-d tree: after voxel thinning every neighbourhood the pipeline
+// asks for is a few centimetres wide, which a grid answers without a tree
+// walk. Stores indices and its own cell-ordered copy of the points (for
+// locality); distances are rotation-invariant, so a grid built before
+// levelling serves the levelled points as well. ROS-free.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "door_state_recognition/preprocess/cell_map.hpp"
+
+namespace dsr {
+namespace segmentation {
+
+class NeighbourGrid {
+ public:
+  NeighbourGrid() = default;
+  NeighbourGrid(const std::vector<Eigen::Vector3f>& points, float cell);
+
+  float cell() const { return cell_; }
+  std::size_t size() const { return pos_.size(); }
+  std::size_t cells() const { return coord_.size(); }
+  // Points of cell c, as indices into the points the grid was built on.
+  const int* cellBegin(std::size_t c) const { return order_.data() + begin_[c]; }
+  const int* cellEnd(std::size_t c) const { return order_.data() + begin_[c + 1]; }
+  // The point of index i as stored (in the frame the grid was built in).
+  const Eigen::Vector3f& point(int i) const { return pos_[slot_[i]]; }
+
+  // Every point within distance r of point i (itself excluded), r <= 2 cell:
+  // index and squared distance appended to idx and d2 (cleared first).
+  void within(int i, float r, std::vector<int>& idx, std::vector<float>& d2) const;
+  // Candidates of a whole cell: every point of the 3 x 3 x 3 cells around c
+  // (ring 1) or 5 x 5 x 5 (ring 2), appended to idx (cleared first).
+  void candidates(std::size_t c, int ring, std::vector<int>& idx) const;
+  // The occupied cells of the (2 ring + 1)^3 block around c, c included.
+  void neighbourCells(std::size_t c, int ring, std::vector<std::uint32_t>& cells) const;
+
+ private:
+  std::uint32_t findCell(int x, int y, int z) const;
+  float cell_ = 1;
+  double inv_ = 1;
+  std::vector<Eigen::Vector3f> pos_;   // points in cell order
+  std::vector<int> order_;             // cell order -> point index
+  std::vector<int> slot_;              // point index -> cell order
+  std::vector<std::uint32_t> begin_;   // cell -> first slot; cells() + 1 entries
+  std::vector<Eigen::Vector3i> coord_; // cell -> integer coordinates
+  preprocess::CellMap map_{1};         // packed cell key -> cell
+};
+
+}  // namespace segmentation
+}  // namespace dsr
