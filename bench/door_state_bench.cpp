@@ -380,8 +380,11 @@ int main(int argc, char** argv) {
   std::printf("ours: dsr::Pipeline without reconstruction; stock: pcl::VoxelGrid, NormalEstimationOMP (all cores), "
               "iterative SACSegmentation (SACMODEL_PARALLEL_PLANE), RegionGrowing, MomentOfInertiaEstimation, "
               "BoundaryEstimation; doors on both by our findDoorways + fitLeaf\n");
-  if (opt.skip_baseline_above < 100000000)
-    std::printf("baseline skipped on clouds above %zu points (--skip-baseline-above)\n", opt.skip_baseline_above);
+  for (const Case& c : cases)
+    if (c.points > opt.skip_baseline_above) {
+      std::printf("baseline skipped on clouds above %zu points (--skip-baseline-above)\n", opt.skip_baseline_above);
+      break;
+    }
 
   const std::vector<std::string> stage_order = {"preprocess", "normals", "floor_ceiling", "walls", "doors", "segments", "boundary", "total"};
   json results = json::array();
