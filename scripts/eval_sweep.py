@@ -11,7 +11,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
-BIN = REPO / "build" / "bin"
+BIN = Path(os.environ["DSR_BIN"]) if os.environ.get("DSR_BIN") else Path(os.environ.get("DSR_BUILD", REPO / "build")) / "bin"
 
 def one(args, seed, out):
     prefix = out / f"{args.sensor}_{seed}"

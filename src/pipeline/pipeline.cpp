@@ -51,6 +51,10 @@ struct Stopwatch {
   void total() { out->push_back({"total", std::chrono::duration<double, std::milli>(Clock::now() - start).count()}); }
 };
 
+// A closed leaf is a door's only evidence when it covers more than this
+// share of its doorway (no trim, see-through or recess).
+constexpr double kClosedBandEvidence = 0.7;
+
 // f(0) ... f(n - 1) over the cores (OpenMP), each at most once; the first
 // exception thrown is rethrown here (none may escape an OpenMP region).
 template <class F>
@@ -184,7 +188,13 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   auto thicknessOf = [&](const recognition::Doorway& d) { return d.thickness > 0.04 ? d.thickness : p.default_wall_thickness; };
   parallelFor(candidates.size(), [&](std::size_t i) {
     Candidate& c = candidates[i];
-    c.leaf = state::fitLeaf(pts, walls[c.wall], c.doorway, floor_z, thicknessOf(c.doorway), viewpoint, p);
+    // Without trim, see-through or a deep recess only a closed leaf filling
+    // the doorway makes it a door (the evidence rule below): skip the search
+    // when the wall band holds too little for one.
+    const recognition::Doorway& d = c.doorway;
+    const bool other_evidence = d.casing || d.through >= 0.08 || d.recess > 0.3;
+    c.leaf = state::fitLeaf(pts, walls[c.wall], d, floor_z, thicknessOf(d), viewpoint, p,
+                            other_evidence ? 0.0 : kClosedBandEvidence);
   });
   for (const segmentation::WallPlane& wall : walls)
     for (int i : wall.inliers) is_wall[i] = 1;
@@ -199,8 +209,9 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
         char buf[400];
         std::snprintf(buf, sizeof buf,
                       "wall %zu: doorway s=[%.2f, %.2f] casing=%d through=%.2f front=%.2f recess=%.2f top=%.2f "
-                      "thick=%.2f | no leaf (best: %.0f deg, coverage %.2f, contradicted %.2f; %d points, %d rays)",
+                      "thick=%.2f | no leaf (%s: %.0f deg, coverage %.2f, contradicted %.2f; %d points, %d rays)",
                       wi, d.s0, d.s1, d.casing, d.through, d.front, d.recess, d.top - floor_z, d.thickness,
+                      leaf.searched ? "best" : "not searched, no evidence and wall band",
                       leaf.best_angle_deg, leaf.best_coverage, leaf.best_contradiction, leaf.candidate_points,
                       leaf.candidate_rays);
         res.trace.push_back(buf);
@@ -208,7 +219,7 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
       }
       // What tells a door from a cupboard or a gap: a closed leaf inside the
       // wall, or trim around the doorway, or the room beyond seen through it.
-      const bool evidence = leaf.closed_in_band ? (d.casing || d.recess > 0.3 || leaf.coverage > 0.7)
+      const bool evidence = leaf.closed_in_band ? (d.casing || d.recess > 0.3 || leaf.coverage > kClosedBandEvidence)
                                                 : (d.casing || d.through >= 0.08);
       const double height = (std::isfinite(d.top) ? d.top : leaf.top_z) - floor_z;
       const double wall_h = top_z - floor_z;

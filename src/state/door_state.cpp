@@ -52,7 +52,7 @@ struct Local {  // a point in wall coordinates: s along, d towards the viewer
 
 LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlane& wall,
                 const recognition::Doorway& door, double floor_z, double t, const Eigen::Vector3f& viewpoint,
-                const Parameters& p) {
+                const Parameters& p, double closed_band_only_above) {
   LeafFit fit;
   const double w = door.width(), L = std::max(0.1, w - 0.008), lt = p.leaf_thickness, tol = p.leaf_tolerance;
   const double z0 = floor_z + 0.25;
@@ -80,6 +80,22 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     if (inside && d > -std::max(t, 0.3) - 0.03 && d < p.face_tolerance + 0.01) band.push_back({s, d, zb, static_cast<int>(i)});
     if (in_wall_band && !inside) continue;  // wall, trim and jambs beside the doorway
     pts.push_back({s, d, zb, static_cast<int>(i)});
+  }
+
+  // A closed leaf anywhere inside the wall's thickness (flush or recessed).
+  const double expected = static_cast<double>(std::max(1, static_cast<int>(std::ceil(L / abin)))) * nz;
+  std::set<std::pair<int, int>> band_cells;
+  std::vector<Eigen::Vector2d> band_xy;
+  for (const Local& q : band) {
+    band_cells.insert({static_cast<int>((q.s - door.s0) / abin), q.zbin});
+    band_xy.emplace_back(q.s, q.d);
+  }
+  const double band_cov = std::min(1.0, band_cells.size() / expected);
+  fit.candidate_points = static_cast<int>(pts.size());
+  if (closed_band_only_above > 0 && band_cov <= closed_band_only_above) {
+    fit.searched = false;
+    fit.best_coverage = band_cov;
+    return fit;
   }
 
   // Rays from the sensor that pass near the doorway: a leaf cannot stand
@@ -111,7 +127,6 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   // Exhaustive search over hinge side, swing side and angle: cells of the
   // leaf holding points (support) against cells rays went through (contradiction).
   const int na = std::max(1, static_cast<int>(std::ceil(L / abin)));
-  const double expected = static_cast<double>(na) * nz;
   const int na_max = std::max(na, static_cast<int>(std::ceil(Lmax / abin)));
   // With both trim legs seen the leaf spans the doorway; otherwise its length is sought.
   const int na_min = door.paired ? std::max(1, na - 1)
@@ -281,14 +296,6 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   }
   const int best_support = best.cells, best_contra = best.contra, best_bins = best.bins;
 
-  // A closed leaf anywhere inside the wall's thickness (flush or recessed).
-  std::set<std::pair<int, int>> band_cells;
-  std::vector<Eigen::Vector2d> band_xy;
-  for (const Local& q : band) {
-    band_cells.insert({static_cast<int>((q.s - door.s0) / abin), q.zbin});
-    band_xy.emplace_back(q.s, q.d);
-  }
-  const double band_cov = std::min(1.0, band_cells.size() / expected);
   double band_angle = 0;
   if (band_xy.size() >= 10) {
     // Only the points at the leaf's own depth: not jambs, trim or what lies beyond.

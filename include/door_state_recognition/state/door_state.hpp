@@ -38,12 +38,17 @@ struct LeafFit {
   double face_d = 0;            // closed leaf: depth of its visible face (<= 0, behind the wall face)
   double best_angle_deg = 0, best_coverage = 0, best_contradiction = 0;  // best hypothesis, found or not
   int candidate_points = 0, candidate_rays = 0;  // points near the doorway, rays passing it
+  bool searched = true;  // false: skipped, no closed leaf could have made it a door (see fitLeaf)
   std::vector<int> inliers;
 };
 
+// `closed_band_only_above` > 0 says that only a closed leaf inside the wall
+// covering more than that share of the doorway could make it a door (the
+// caller found no other evidence): when the points in the wall band cover
+// less, the search is skipped (searched = false, found = false).
 LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlane& wall,
                 const recognition::Doorway& doorway, double floor_z, double thickness,
-                const Eigen::Vector3f& viewpoint, const Parameters& p);
+                const Eigen::Vector3f& viewpoint, const Parameters& p, double closed_band_only_above = 0);
 
 DoorStateKind classify(double angle_deg, const Parameters& p);
 
