@@ -543,6 +543,58 @@ TEST_F(CloudReader, TwoBillionPointsIn200Bytes) {
   }
 }
 
+// ------------------------------------------------------------------ from memory
+
+// readCloudFromMemory (the fuzz target's entry) reads what readCloud reads from
+// the same bytes, and refuses what it refuses with the same message.
+TEST_F(CloudReader, FromMemoryAgreesWithTheFileReader) {
+  std::vector<std::string> contents;
+  pcl::io::savePCDFileASCII(file("a.pcd"), organized());
+  pcl::io::savePCDFileBinary(file("b.pcd"), organized());
+  pcl::io::savePCDFileBinaryCompressed(file("c.pcd"), organized());
+  for (const char* f : {"a.pcd", "b.pcd", "c.pcd"}) {
+    const std::string s = slurp(file(f));
+    contents.push_back(s);
+    contents.push_back(s.substr(0, s.size() - 3));  // truncated
+  }
+  // Binary PLY with an element skipped by seeking, then the same cut short inside it.
+  std::string ply =
+      "ply\nformat binary_little_endian 1.0\nelement camera 2\nproperty double k\n"
+      "element vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+  put<double>(ply, 1.0); put<double>(ply, 2.0);
+  for (float v : {1.f, 2.f, 3.f, -4.f, -5.f, -6.f}) put<float>(ply, v);
+  contents.push_back(ply);
+  contents.push_back(ply.substr(0, ply.size() - 30));
+  contents.push_back("");
+  contents.push_back("not a cloud\n");
+  for (std::size_t i = 0; i < contents.size(); ++i) {
+    SCOPED_TRACE("content " + std::to_string(i));
+    const std::string& s = contents[i];
+    const std::string path = write("m" + std::to_string(i), s);
+    std::string file_error, memory_error;
+    Cloud from_file, from_memory;
+    try { from_file = readCloud(path); } catch (const CloudReadError& e) { file_error = e.what(); }
+    try {
+      from_memory = dsr::io::readCloudFromMemory(s.data(), s.size(), path);
+    } catch (const CloudReadError& e) {
+      memory_error = e.what();
+    }
+    if (s.empty()) {  // the only difference: a file says "file is empty"
+      EXPECT_NE(file_error.find("file is empty"), std::string::npos) << file_error;
+      EXPECT_EQ(memory_error, path + ": input is empty");
+      continue;
+    }
+    EXPECT_EQ(memory_error, file_error);
+    if (file_error.empty()) {
+      expectSameCloud(from_memory, from_file);
+      EXPECT_EQ(from_memory.is_dense, from_file.is_dense);
+    }
+  }
+  // The good ones really were read (the comparison above is not between two errors).
+  EXPECT_EQ(dsr::io::readCloudFromMemory(contents[4].data(), contents[4].size()).size(), 12u);
+  expectSamePoint(dsr::io::readCloudFromMemory(ply.data(), ply.size())[1], pcl::PointXYZ(-4, -5, -6));
+}
+
 // ------------------------------------------------------------------ real data
 
 fs::path sharedDataDir() {

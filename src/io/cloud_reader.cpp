@@ -11,7 +11,9 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <new>
+#include <streambuf>
 #include <string_view>
 #include <system_error>
 #include <vector>
@@ -68,7 +70,29 @@ bool parseU64(std::string_view s, u64& v) {
   return !s.empty() && r.ec == std::errc() && r.ptr == s.data() + s.size();
 }
 
-// Sequential reader over a regular file that knows how many bytes are left.
+// A read-only streambuf over bytes in memory that can seek (skipBytes needs it).
+class MemoryBuf : public std::streambuf {
+ public:
+  MemoryBuf(const char* data, std::size_t size) {
+    char* p = const_cast<char*>(data);  // never written through: no overflow/pbackfail
+    setg(p, p, p + size);
+  }
+
+ protected:
+  pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode which) override {
+    const off_type fail = -1, size = egptr() - eback();
+    if (!(which & std::ios_base::in)) return pos_type(fail);
+    off_type base = dir == std::ios_base::beg ? 0 : dir == std::ios_base::cur ? gptr() - eback() : size;
+    if (off > size - base || off < -base) return pos_type(fail);
+    setg(eback(), eback() + (base + off), egptr());
+    return pos_type(base + off);
+  }
+  pos_type seekpos(pos_type pos, std::ios_base::openmode which) override {
+    return seekoff(off_type(pos), std::ios_base::beg, which);
+  }
+};
+
+// Sequential reader over a regular file (or bytes in memory) that knows how many bytes are left.
 class Input {
  public:
   explicit Input(const std::string& path) : path_(path) {
@@ -78,9 +102,16 @@ class Input {
     if (!fs::is_regular_file(st)) fail("not a regular file");
     size_ = fs::file_size(path, ec);
     if (ec) fail("cannot get file size (" + ec.message() + ")");
-    if (!buf_.open(path, std::ios::in | std::ios::binary))
+    auto file = std::make_unique<std::filebuf>();
+    if (!file->open(path, std::ios::in | std::ios::binary))
       fail(std::string("cannot open file (") + std::strerror(errno) + ")");
+    buf_ = std::move(file);
     if (size_ == 0) fail("file is empty");
+  }
+
+  Input(const char* data, std::size_t size, const std::string& name)
+      : path_(name), buf_(std::make_unique<MemoryBuf>(data, size)), size_(size) {
+    if (size_ == 0) fail("input is empty");
   }
 
   [[noreturn]] void fail(const std::string& msg) const { throw CloudReadError(path_ + ": " + msg); }
@@ -89,13 +120,13 @@ class Input {
   // Reads one line (without "\n" / "\r\n"); false at end of file.
   bool readLine(std::string& line) {
     line.clear();
-    int c = buf_.sbumpc();
+    int c = buf_->sbumpc();
     if (c == EOF) return false;
     while (c != EOF && c != '\n') {
       ++pos_;
       if (line.size() >= kMaxLine) fail("line longer than " + std::to_string(kMaxLine) + " bytes");
       line += static_cast<char>(c);
-      c = buf_.sbumpc();
+      c = buf_->sbumpc();
     }
     if (c == '\n') ++pos_;
     if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -105,34 +136,34 @@ class Input {
   // Reads one whitespace-separated token; false at end of file.
   bool readToken(std::string& tok) {
     tok.clear();
-    int c = buf_.sbumpc();
-    while (c != EOF && std::isspace(c)) { ++pos_; c = buf_.sbumpc(); }
+    int c = buf_->sbumpc();
+    while (c != EOF && std::isspace(c)) { ++pos_; c = buf_->sbumpc(); }
     while (c != EOF && !std::isspace(c)) {
       ++pos_;
       if (tok.size() >= kMaxToken) fail("value longer than " + std::to_string(kMaxToken) + " characters");
       tok += static_cast<char>(c);
-      c = buf_.sbumpc();
+      c = buf_->sbumpc();
     }
     if (c != EOF) ++pos_;
     return !tok.empty();
   }
 
   void readBytes(char* dst, u64 n, const char* what) {
-    if (n > remaining() || static_cast<u64>(buf_.sgetn(dst, static_cast<std::streamsize>(n))) != n)
+    if (n > remaining() || static_cast<u64>(buf_->sgetn(dst, static_cast<std::streamsize>(n))) != n)
       fail(std::string("file ends inside ") + what);
     pos_ += n;
   }
 
   void skipBytes(u64 n, const char* what) {
     if (n > remaining()) fail(std::string("file ends inside ") + what);
-    auto p = buf_.pubseekoff(static_cast<std::streamoff>(n), std::ios::cur, std::ios::in);
+    auto p = buf_->pubseekoff(static_cast<std::streamoff>(n), std::ios::cur, std::ios::in);
     if (p == std::streampos(std::streamoff(-1))) fail(std::string("cannot seek past ") + what);
     pos_ += n;
   }
 
  private:
   std::string path_;
-  std::filebuf buf_;
+  std::unique_ptr<std::streambuf> buf_;
   u64 size_ = 0, pos_ = 0;
 };
 
@@ -545,9 +576,13 @@ pcl::PointCloud<pcl::PointXYZ> readPly(Input& in) {
 
 void setMaxPoints(std::size_t n) { g_max_points = n; }
 
-pcl::PointCloud<pcl::PointXYZ> readCloud(const std::string& path) {
+namespace {
+
+// Reads a cloud from `in`; every error becomes a CloudReadError naming `name`.
+template <typename MakeInput>
+pcl::PointCloud<pcl::PointXYZ> readFrom(const std::string& name, MakeInput make) {
   try {
-    Input in(path);
+    Input in = make();
     // PLY files start with the line "ply"; anything else is tried as PCD.
     std::string first;
     in.readLine(first);
@@ -557,10 +592,20 @@ pcl::PointCloud<pcl::PointXYZ> readCloud(const std::string& path) {
   } catch (const CloudReadError&) {
     throw;
   } catch (const std::bad_alloc&) {
-    throw CloudReadError(path + ": out of memory while reading");
+    throw CloudReadError(name + ": out of memory while reading");
   } catch (const std::exception& e) {
-    throw CloudReadError(path + ": " + e.what());
+    throw CloudReadError(name + ": " + e.what());
   }
+}
+
+}  // namespace
+
+pcl::PointCloud<pcl::PointXYZ> readCloud(const std::string& path) {
+  return readFrom(path, [&] { return Input(path); });
+}
+
+pcl::PointCloud<pcl::PointXYZ> readCloudFromMemory(const void* data, std::size_t size, const std::string& name) {
+  return readFrom(name, [&] { return Input(static_cast<const char*>(data), size, name); });
 }
 
 }}  // namespace dsr::io

@@ -15,6 +15,10 @@ class CloudReadError : public std::runtime_error { using std::runtime_error::run
 // are skipped. x,y,z may be float32 or float64 (converted to float); any
 // other type for x/y/z is an error. Throws CloudReadError on anything wrong.
 pcl::PointCloud<pcl::PointXYZ> readCloud(const std::string& path);
+// The same from `size` bytes in memory (a file's content); `name` stands for
+// the path in error messages. Used by the fuzz target; nothing is copied.
+pcl::PointCloud<pcl::PointXYZ> readCloudFromMemory(const void* data, std::size_t size,
+                                                   const std::string& name = "<memory>");
 // Upper bound on points accepted (default 50,000,000); a header asking more is refused.
 void setMaxPoints(std::size_t n);
 }}
