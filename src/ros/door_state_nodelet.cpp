@@ -3,6 +3,13 @@
 // Subscribes `points` (sensor_msgs/PointCloud2, queue 1) only while one of
 // its outputs has a subscriber; with ~fixed_frame set, clouds wait in a
 // tf2_ros::MessageFilter until their transform to the fixed frame is known.
+// The subscriber callback only puts the cloud into a one-cloud slot; a worker
+// thread of the nodelet's own processes the cloud in the slot. A cloud that
+// arrives while another waits in the slot replaces it (the stale one is
+// dropped and counted): under a stream faster than the pipeline, latency stays
+// bounded by about two processing times and memory by two clouds, and the
+// nodelet's callback queue (dynamic_reconfigure, diagnostics, connection
+// callbacks) is never blocked by the pipeline.
 // Publishes `doors` (DoorStateArray), `markers` (MarkerArray) and
 // `reconstructed_walls` (PointCloud2). Bad input is logged (throttled) and
 // answered with an empty DoorStateArray carrying the input's header; nothing
@@ -21,12 +28,17 @@
 #include <tf2_ros/transform_listener.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <algorithm>
+#include <array>
 #include <atomic>
 #include <boost/thread/recursive_mutex.hpp>
 #include <chrono>
+#include <cmath>
+#include <condition_variable>
 #include <memory>
 #include <mutex>
 #include <sstream>
+#include <thread>
 
 #include "door_state_recognition/DoorStateArray.h"
 #include "door_state_recognition/DoorStateConfig.h"
@@ -57,14 +69,68 @@ std::string toYaml(const DoorStateConfig& config) {
   return os.str();
 }
 
+// Names the double parameters of `config` that are NaN or infinite: the
+// generated __clamp__ lets NaN through (every comparison with it is false).
+std::string nonFinite(const DoorStateConfig& config) {
+  std::string bad;
+  for (const auto& d : DoorStateConfig::__getParamDescriptions__()) {
+    if (d->type != "double") continue;
+    boost::any v;
+    d->getValue(config, v);
+    const double x = boost::any_cast<double>(v);
+    if (!std::isfinite(x)) bad += (bad.empty() ? "" : ", ") + d->name + " = " + (std::isnan(x) ? "NaN" : "Inf");
+  }
+  return bad.empty() ? bad : "parameter " + bad + " is not a finite number";
+}
+
+// The last kWindow values of a figure, without allocating per value.
+class Window {
+ public:
+  static constexpr std::size_t kWindow = 256;
+  void add(double v) {
+    values_[next_] = v;
+    next_ = (next_ + 1) % kWindow;
+    size_ = std::min(size_ + 1, kWindow);
+  }
+  // Quantile q in [0, 1] of the values held (0 when none).
+  double quantile(double q) const {
+    if (size_ == 0) return 0.0;
+    std::array<double, kWindow> v;
+    std::copy(values_.begin(), values_.begin() + size_, v.begin());
+    const std::size_t k = std::min(size_ - 1, static_cast<std::size_t>(std::lround(q * (size_ - 1))));
+    std::nth_element(v.begin(), v.begin() + k, v.begin() + size_);
+    return v[k];
+  }
+  std::size_t size() const { return size_; }
+
+ private:
+  std::array<double, kWindow> values_{};
+  std::size_t next_ = 0, size_ = 0;
+};
+
 }  // namespace
 
 class DoorStateNodelet : public nodelet::Nodelet {
  public:
   ~DoorStateNodelet() override {
-    // Stop callbacks before the members they use go away.
-    std::lock_guard<std::mutex> lock(connect_mutex_);
-    unsubscribe();
+    // Stop callbacks before the members they use go away, then the worker
+    // (it finishes the cloud under way: the pipeline cannot be interrupted).
+    // Nothing here may throw.
+    try {
+      diagnostics_timer_.stop();
+      {
+        std::lock_guard<std::mutex> lock(connect_mutex_);
+        unsubscribe();
+      }
+      {
+        std::lock_guard<std::mutex> lock(slot_mutex_);
+        stop_ = true;
+        pending_.reset();
+      }
+      slot_cv_.notify_all();
+      if (worker_.joinable()) worker_.join();
+    } catch (...) {
+    }
   }
 
  private:
@@ -74,7 +140,8 @@ class DoorStateNodelet : public nodelet::Nodelet {
     pnh_.param<std::string>("fixed_frame", fixed_frame_, "");
     pnh_.param("tf_queue_size", tf_queue_size_, 5);
     if (tf_queue_size_ < 1) tf_queue_size_ = 1;
-    pipeline_ = std::make_unique<dsr::Pipeline>(params_);
+    pipeline_ = std::make_shared<const dsr::Pipeline>(params_);
+    last_good_config_ = DoorStateConfig::__getDefault__();
 
     // Every pipeline parameter is a ~ parameter, read (and kept live) by the
     // dynamic_reconfigure server; its first callback sets them up.
@@ -89,6 +156,14 @@ class DoorStateNodelet : public nodelet::Nodelet {
     diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh_, pnh_, getName());
     diagnostics_->setHardwareID("none");
     diagnostics_->add("door_state", this, &DoorStateNodelet::diagnose);
+
+    // The worker that runs the pipeline. Should no thread be had, clouds are
+    // processed in the subscriber callback (and queue 1 drops stale ones).
+    try {
+      worker_ = std::thread([this] { work(); });
+    } catch (const std::exception& e) {
+      NODELET_ERROR("door_state: no worker thread (%s): clouds are processed in the subscriber callback", e.what());
+    }
 
     // The connect callbacks may fire as soon as the publishers exist: hold
     // the lock until every publisher is assigned.
@@ -123,6 +198,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
           [this](const sensor_msgs::PointCloud2ConstPtr& msg, tf2_ros::filter_failure_reasons::FilterFailureReason) {
             NODELET_WARN_THROTTLE(5.0, "door_state: no transform from '%s' to '%s' at %.3f: cloud dropped",
                                   msg->header.frame_id.c_str(), fixed_frame_.c_str(), msg->header.stamp.toSec());
+            ++clouds_no_tf_;
             noteError("no transform from '" + msg->header.frame_id + "' to '" + fixed_frame_ + "'");
           });
     }
@@ -136,65 +212,169 @@ class DoorStateNodelet : public nodelet::Nodelet {
     subscribed_ = false;
   }
 
+  // dynamic_reconfigure: a configuration the pipeline refuses (out of range,
+  // NaN, inconsistent with another parameter, unknown up axis) is logged,
+  // the previous one stays in force, and `config` is set back to it: the
+  // server stores what the callback leaves in `config` on the parameter
+  // server, publishes it on parameter_updates and returns it to the caller.
   void reconfigure(DoorStateConfig& config, uint32_t) {
-    // Holding the processing lock: a cloud is processed with one set of
-    // parameters, never half of two.
-    std::lock_guard<std::mutex> lock(process_mutex_);
     try {
-      dsr::Parameters next = dsr::parseParameters(toYaml(config), dsr::Parameters(), "parameters");
+      const std::string non_finite = nonFinite(config);
+      if (!non_finite.empty()) throw std::invalid_argument(non_finite);
+      dsr::Parameters next = dsr::parseParameters(toYaml(config), dsr::Parameters(), "dynamic_reconfigure");
       // A fixed frame is gravity-aligned (REP 105): there z is up, whatever ~up_axis says.
       if (!fixed_frame_.empty()) next.up_axis = "+z";
-      pipeline_ = std::make_unique<dsr::Pipeline>(next);
-      params_ = next;
+      auto pipeline = std::make_shared<const dsr::Pipeline>(next);
+      {
+        // A cloud is processed with one set of parameters, never half of two:
+        // the worker takes the pipeline under this lock and keeps its copy.
+        std::lock_guard<std::mutex> lock(process_mutex_);
+        pipeline_ = std::move(pipeline);
+        params_ = next;
+      }
+      last_good_config_ = config;
     } catch (const std::exception& e) {
-      NODELET_ERROR("door_state: parameters refused, the previous ones stay in force: %s", e.what());
-      noteError(std::string("parameters refused: ") + e.what());
+      // Each distinct refusal is logged; the same one repeated at most every 10 s.
+      const std::string what = e.what();
+      const ros::WallTime now = ros::WallTime::now();
+      if (what != last_refusal_ || (now - last_refusal_time_).toSec() > 10.0) {
+        NODELET_ERROR("door_state: parameters refused, the previous ones stay in force: %s", what.c_str());
+        last_refusal_ = what;
+        last_refusal_time_ = now;
+      }
+      noteError("parameters refused: " + what);
+      config = last_good_config_;
     }
   }
 
+  // Subscriber (or tf filter) callback: hand the cloud to the worker through
+  // the one-cloud slot. A cloud still waiting there is stale: dropped. So is
+  // a cloud older than one already taken: the tf filter releases the clouds
+  // it held for a late transform in no particular order. (When ROS time has
+  // gone back, e.g. a looped bag, older stamps are accepted again.)
   void cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg) {
-    const auto t0 = std::chrono::steady_clock::now();
     ++clouds_in_;
-    std::size_t max_points;
+    const ros::WallTime received = ros::WallTime::now();
+    bool dropped = false;
+    {
+      std::lock_guard<std::mutex> lock(slot_mutex_);
+      if (stop_) return;
+      const ros::Time stamp = msg->header.stamp;
+      if (stamp < newest_stamp_ && !(ros::Time::now() < newest_stamp_)) {
+        ++clouds_dropped_;
+        NODELET_DEBUG_THROTTLE(5.0, "door_state: cloud at %.3f older than one at %.3f already taken: dropped",
+                               stamp.toSec(), newest_stamp_.toSec());
+        return;
+      }
+      newest_stamp_ = stamp;
+      if (worker_.joinable()) {
+        dropped = static_cast<bool>(pending_);
+        pending_ = msg;
+        pending_received_ = received;
+      }
+    }
+    if (!worker_.joinable()) {
+      process(msg, received);
+      return;
+    }
+    slot_cv_.notify_one();
+    if (dropped) {
+      ++clouds_dropped_;
+      NODELET_DEBUG_THROTTLE(5.0, "door_state: clouds arrive faster than they are processed: stale cloud dropped");
+    }
+  }
+
+  void work() {
+    for (;;) {
+      sensor_msgs::PointCloud2ConstPtr msg;
+      ros::WallTime received;
+      {
+        std::unique_lock<std::mutex> lock(slot_mutex_);
+        slot_cv_.wait(lock, [this] { return stop_ || pending_; });
+        if (stop_) return;
+        msg.swap(pending_);
+        received = pending_received_;
+      }
+      process(msg, received);
+    }
+  }
+
+  // Runs the pipeline on one cloud and publishes. Never throws.
+  void process(const sensor_msgs::PointCloud2ConstPtr& msg, const ros::WallTime& received) {
+    try {
+      processOrThrow(msg, received);
+    } catch (const std::exception& e) {
+      NODELET_ERROR_THROTTLE(5.0, "door_state: cloud in frame '%s' not processed: %s", msg->header.frame_id.c_str(), e.what());
+      noteError(e.what());
+      publishEmptyNoThrow(msg->header);
+    } catch (...) {
+      NODELET_ERROR_THROTTLE(5.0, "door_state: cloud in frame '%s' not processed: unknown exception", msg->header.frame_id.c_str());
+      noteError("unknown exception");
+      publishEmptyNoThrow(msg->header);
+    }
+  }
+
+  void processOrThrow(const sensor_msgs::PointCloud2ConstPtr& msg, const ros::WallTime& received) {
+    const auto t0 = std::chrono::steady_clock::now();
+    std::shared_ptr<const dsr::Pipeline> pipeline;
     {
       std::lock_guard<std::mutex> lock(process_mutex_);
-      max_points = static_cast<std::size_t>(params_.max_points);
+      pipeline = pipeline_;
     }
-    const std::string problem = dsr::ros_io::validate(*msg, max_points);
+    const std::string problem =
+        dsr::ros_io::validate(*msg, static_cast<std::size_t>(pipeline->parameters().max_points));
     if (!problem.empty()) {
       NODELET_ERROR_THROTTLE(5.0, "door_state: malformed cloud in frame '%s': %s", msg->header.frame_id.c_str(),
                              problem.c_str());
+      ++clouds_refused_;
       noteError("malformed cloud: " + problem);
       publishEmpty(msg->header);
       return;
     }
-    try {
-      pcl::PointCloud<pcl::PointXYZ> cloud;
-      dsr::ros_io::toPcl(*msg, cloud);
-      std_msgs::Header out_header = msg->header;
-      Eigen::Vector3d viewpoint = Eigen::Vector3d::Zero();
-      if (!fixed_frame_.empty() && msg->header.frame_id != fixed_frame_) {
-        const Eigen::Isometry3d T =
-            tf2::transformToEigen(tf_buffer_->lookupTransform(fixed_frame_, msg->header.frame_id, msg->header.stamp));
-        const Eigen::Matrix3f R = T.linear().cast<float>();
-        const Eigen::Vector3f t = T.translation().cast<float>();
-        for (auto& p : cloud.points) p.getVector3fMap() = R * p.getVector3fMap() + t;
-        viewpoint = T.translation();
-        out_header.frame_id = fixed_frame_;
-      }
-      dsr::PipelineResult result;
-      {
-        std::lock_guard<std::mutex> lock(process_mutex_);
-        result = pipeline_->run(cloud, wantWalls(), viewpoint);
-      }
-      publish(result, out_header);
-      last_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-      ++clouds_done_;
-    } catch (const std::exception& e) {
-      NODELET_ERROR_THROTTLE(5.0, "door_state: cloud in frame '%s' not processed: %s", msg->header.frame_id.c_str(), e.what());
-      noteError(e.what());
-      publishEmpty(msg->header);
+    // One conversion PointCloud2 -> PCL into a buffer kept between clouds
+    // (its capacity is reused: no per-cloud allocation of the point array
+    // once the largest cloud has been seen); the move into the fixed frame
+    // is done in place.
+    dsr::ros_io::toPcl(*msg, cloud_);
+    std_msgs::Header out_header = msg->header;
+    Eigen::Vector3d viewpoint = Eigen::Vector3d::Zero();
+    if (!fixed_frame_.empty() && msg->header.frame_id != fixed_frame_) {
+      const Eigen::Isometry3d T =
+          tf2::transformToEigen(tf_buffer_->lookupTransform(fixed_frame_, msg->header.frame_id, msg->header.stamp));
+      const Eigen::Matrix3f R = T.linear().cast<float>();
+      const Eigen::Vector3f t = T.translation().cast<float>();
+      for (auto& p : cloud_.points) p.getVector3fMap() = R * p.getVector3fMap() + t;
+      viewpoint = T.translation();
+      out_header.frame_id = fixed_frame_;
     }
+    const dsr::PipelineResult result = pipeline->run(cloud_, wantWalls(), viewpoint);
+    if (!result.warnings.empty()) {
+      std::string all;
+      for (const auto& w : result.warnings) all += (all.empty() ? "" : "; ") + w;
+      // Nothing found at all: the input is degenerate (empty, all NaN, a
+      // line, a plane, a wrong up axis): worth a warning. Otherwise (e.g.
+      // "no ceiling in view" for a camera) only a debug message.
+      if (result.walls.empty()) {
+        NODELET_WARN_THROTTLE(5.0, "door_state: cloud in frame '%s' (%zu points): no walls: %s",
+                              msg->header.frame_id.c_str(), result.points_in, all.c_str());
+        ++clouds_degenerate_;
+        noteError("no walls: " + all);
+      } else {
+        NODELET_DEBUG_THROTTLE(5.0, "door_state: %s", all.c_str());
+      }
+    }
+    publish(result, out_header);
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    const double in_node_ms = (ros::WallTime::now() - received).toSec() * 1e3;
+    const double age_ms = (ros::Time::now() - msg->header.stamp).toSec() * 1e3;
+    {
+      std::lock_guard<std::mutex> lock(diag_mutex_);
+      processing_ms_.add(ms);
+      in_node_ms_.add(in_node_ms);
+      age_ms_.add(age_ms);
+    }
+    last_ms_ = ms;
+    ++clouds_done_;
   }
 
   bool wantWalls() const { return pub_walls_.getNumSubscribers() > 0 || pub_markers_.getNumSubscribers() > 0; }
@@ -241,12 +421,23 @@ class DoorStateNodelet : public nodelet::Nodelet {
     pub_doors_.publish(out);
   }
 
+  void publishEmptyNoThrow(const std_msgs::Header& header) {
+    try {
+      publishEmpty(header);
+    } catch (...) {
+    }
+  }
+
   void noteError(const std::string& what) {
     std::lock_guard<std::mutex> lock(diag_mutex_);
     last_error_ = what;
     last_error_time_ = ros::WallTime::now();
   }
 
+  // Counters since start; processing time and latencies over the last
+  // Window::kWindow processed clouds. "latency from stamp" is the age of the
+  // cloud (ROS time now minus its header stamp) when its doors are published:
+  // it includes what happened before the nodelet (driver, transport).
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
     const ros::WallTime now = ros::WallTime::now();
     const double dt = last_diag_.isZero() ? 0.0 : (now - last_diag_).toSec();
@@ -261,9 +452,20 @@ class DoorStateNodelet : public nodelet::Nodelet {
     stat.add("input rate (Hz)", rate);
     stat.add("clouds received", in);
     stat.add("clouds processed", done);
+    stat.add("clouds dropped (stale)", clouds_dropped_.load());
+    stat.add("clouds dropped (no tf)", clouds_no_tf_.load());
+    stat.add("clouds refused (malformed)", clouds_refused_.load());
+    stat.add("clouds without walls", clouds_degenerate_.load());
     stat.add("last processing time (ms)", last_ms_.load());
+    stat.add("processing time p50 (ms)", processing_ms_.quantile(0.5));
+    stat.add("processing time max (ms)", processing_ms_.quantile(1.0));
+    stat.add("latency in node p50 (ms)", in_node_ms_.quantile(0.5));
+    stat.add("latency in node max (ms)", in_node_ms_.quantile(1.0));
+    stat.add("latency from stamp p50 (ms)", age_ms_.quantile(0.5));
+    stat.add("latency from stamp max (ms)", age_ms_.quantile(1.0));
     stat.add("last error", last_error_.empty() ? std::string("none") : last_error_);
     stat.add("subscribed", subscribed_ ? "yes" : "no");
+    stat.add("worker thread", worker_.joinable() ? "yes" : "no (processing in the callback)");
     stat.add("fixed frame", fixed_frame_.empty() ? std::string("(cloud frame)") : fixed_frame_);
   }
 
@@ -277,15 +479,29 @@ class DoorStateNodelet : public nodelet::Nodelet {
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::unique_ptr<tf2_ros::MessageFilter<sensor_msgs::PointCloud2>> tf_filter_;
   std::mutex connect_mutex_, process_mutex_, diag_mutex_;
-  bool subscribed_ = false;
+  std::atomic<bool> subscribed_{false};
   boost::recursive_mutex reconfigure_mutex_;
   std::unique_ptr<dynamic_reconfigure::Server<DoorStateConfig>> reconfigure_;
   dsr::Parameters params_;
-  std::unique_ptr<dsr::Pipeline> pipeline_;
-  dsr::DoorTracker tracker_;
+  std::shared_ptr<const dsr::Pipeline> pipeline_;  // swapped under process_mutex_
+  DoorStateConfig last_good_config_;                // the configuration in force
+  std::string last_refusal_;
+  ros::WallTime last_refusal_time_;
+  dsr::DoorTracker tracker_;                        // worker only
+  pcl::PointCloud<pcl::PointXYZ> cloud_;            // worker only, reused between clouds
+  // The one-cloud slot between the subscriber callback and the worker.
+  std::mutex slot_mutex_;
+  std::condition_variable slot_cv_;
+  sensor_msgs::PointCloud2ConstPtr pending_;
+  ros::WallTime pending_received_;
+  ros::Time newest_stamp_;  // of the newest cloud taken into the slot
+  bool stop_ = false;
+  std::thread worker_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   ros::WallTimer diagnostics_timer_;
-  std::atomic<unsigned long> clouds_in_{0}, clouds_done_{0};
+  std::atomic<unsigned long> clouds_in_{0}, clouds_done_{0}, clouds_dropped_{0}, clouds_no_tf_{0}, clouds_refused_{0},
+      clouds_degenerate_{0};
+  Window processing_ms_, in_node_ms_, age_ms_;  // under diag_mutex_
   unsigned long last_in_ = 0;
   ros::WallTime last_diag_;
   std::atomic<double> last_ms_{0.0};

@@ -11,8 +11,11 @@
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <diagnostic_msgs/DiagnosticArray.h>
+
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <limits>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -89,7 +92,10 @@ sensor_msgs::PointCloud2 toMsg(const sim::SimulatedCloud& c, const std::string& 
 class NodeletTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    pub_ = nh_.advertise<sensor_msgs::PointCloud2>("points", 1);
+    // A queue as long as the burst of StaleCloudsAreDroppedUnderABurst, so
+    // that no cloud is lost before it reaches the nodelet: every drop is the
+    // nodelet's. (The other tests send one cloud at a time.)
+    pub_ = nh_.advertise<sensor_msgs::PointCloud2>("points", 8);
   }
   // Callbacks run on spinner threads: end the subscriptions (which waits for
   // callbacks under way) before the members they write to are destroyed.
@@ -123,6 +129,25 @@ class NodeletTest : public ::testing::Test {
           return false;
         },
         seconds);
+  }
+
+  // The nodelet's diagnostics (key -> value) from the first message that
+  // leaves it after `after` (the diagnostics go out once a second).
+  std::map<std::string, std::string> diagnostics(const ros::WallTime& after, double seconds = 10.0) {
+    std::mutex m;
+    std::map<std::string, std::string> values;
+    ros::Subscriber sub = nh_.subscribe<diagnostic_msgs::DiagnosticArray>(
+        "/diagnostics", 10, [&](const diagnostic_msgs::DiagnosticArrayConstPtr& a) {
+          if (ros::WallTime::now() < after) return;
+          std::lock_guard<std::mutex> l(m);
+          for (const auto& st : a->status)
+            if (st.name.find("door_state") != std::string::npos)
+              for (const auto& kv : st.values) values[kv.key] = kv.value;
+        });
+    waitFor([&] { std::lock_guard<std::mutex> l(m); return !values.empty(); }, seconds);
+    sub.shutdown();
+    std::lock_guard<std::mutex> l(m);
+    return values;
   }
 
   Received rx_;  // declared first, destroyed last
@@ -279,6 +304,71 @@ TEST_F(NodeletTest, ParametersChangeLiveThroughDynamicReconfigure) {
   ASSERT_EQ(after.doors.size(), 1u);
   EXPECT_EQ(after.doors[0].state, door_state_recognition::DoorState::SEMI_OPEN) << "open_from_deg 115 not in force";
   ASSERT_TRUE(set(90.0));
+}
+
+// Issue 5: under a stream it cannot keep up with, the nodelet drops stale
+// clouds instead of queueing them. A burst of clouds with distinct stamps,
+// published faster than one is processed: fewer answers than clouds, the
+// last cloud answered, answers in stamp order (never a stale one after a
+// newer one), and the drops counted in the diagnostics. In the tf suite the
+// burst waits in the tf filter for a transform that comes only after the
+// whole burst, so that every cloud of it is released at once: they must not
+// all be processed one after the other. No wall-clock limit is asserted.
+TEST_F(NodeletTest, StaleCloudsAreDroppedUnderABurst) {
+  if (g_mode == "bag") GTEST_SKIP();
+  const int n = 5;  // no longer than the tf filter's queue (~tf_queue_size 5)
+  listen();
+  const SimScan scan = simulate("paper_house", 11);
+  const std::string frame = g_mode == "tf" ? "late_sensor" : "tls_scanner";
+  const sensor_msgs::PointCloud2 base = toMsg(scan.cloud, frame, 0.0);
+  std::vector<sensor_msgs::PointCloud2::Ptr> burst;
+  for (int k = 0; k < n; ++k) {
+    burst.push_back(boost::make_shared<sensor_msgs::PointCloud2>(base));
+    burst.back()->header.stamp = ros::Time(600.0 + k);
+  }
+  for (const auto& m : burst) pub_.publish(m);
+  tf2_ros::StaticTransformBroadcaster tfb;
+  if (g_mode == "tf") {
+    ros::WallDuration(2.0).sleep();  // the whole burst waits in the tf filter
+    ASSERT_EQ(rx_.count(), 0u) << "a cloud was processed without its transform";
+    geometry_msgs::TransformStamped t = tf2::eigenToTransform(scan.cloud.sensor_to_world);
+    t.header.frame_id = "map";
+    t.child_frame_id = frame;
+    tfb.sendTransform(t);
+  }
+  const ros::Time last = burst.back()->header.stamp;
+  EXPECT_TRUE(waitFor(
+      [&] {
+        std::lock_guard<std::mutex> l(rx_.m);
+        for (const auto& d : rx_.doors)
+          if (d.header.stamp == last) return true;
+        return false;
+      },
+      120.0))
+      << "the last cloud of the burst was never answered";
+  // Anything still in flight would come within a few processing times.
+  ros::WallDuration(3.0).sleep();
+  std::vector<double> stamps;
+  {
+    std::lock_guard<std::mutex> l(rx_.m);
+    for (const auto& d : rx_.doors) {
+      stamps.push_back(d.header.stamp.toSec());
+      EXPECT_EQ(d.doors.size(), 1u) << "a cloud of the burst was not processed right";
+    }
+  }
+  std::ostringstream seen;
+  for (double s : stamps) seen << s << " ";
+  SCOPED_TRACE("answered stamps: " + seen.str());
+  RecordProperty("answered_stamps", seen.str());
+  const auto diag = diagnostics(ros::WallTime::now());
+  for (const auto& kv : diag) RecordProperty(kv.first, kv.second);
+  ASSERT_FALSE(stamps.empty());
+  EXPECT_LT(stamps.size(), static_cast<std::size_t>(n)) << "every cloud of the burst was processed: clouds are queued";
+  EXPECT_EQ(stamps.back(), last.toSec()) << "a stale cloud was answered after the newest one";
+  for (std::size_t i = 1; i < stamps.size(); ++i) EXPECT_LT(stamps[i - 1], stamps[i]) << "answers out of stamp order";
+  ASSERT_TRUE(diag.count("clouds dropped (stale)")) << "no drop counter in the diagnostics";
+  EXPECT_GE(std::stoul(diag.at("clouds dropped (stale)")), 1u);
+  EXPECT_GE(std::stoul(diag.at("clouds processed")), stamps.size());
 }
 
 TEST(Reconfigure, CfgDefaultsAreTheCodesDefaults) {
