@@ -102,10 +102,10 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   }
 
   // --- normals: one neighbour grid serves normals and region growing ---------
-  // Cells of 2 voxels: a neighbourhood of 3 x 3 x 3 cells, 6 voxels wide,
+  // Cells of 1.5 voxels: a neighbourhood of 3 x 3 x 3 cells, 4.5 voxels wide,
   // holds normal_k points or more of a surface thinned to the voxel size even
   // where the scan is sparser than the voxel grid.
-  const segmentation::NeighbourGrid grid(thinned, static_cast<float>(2.0 * std::max(p.voxel_size, 0.01)));
+  const segmentation::NeighbourGrid grid(thinned, static_cast<float>(1.5 * std::max(p.voxel_size, 0.01)));
   segmentation::Normals normals = segmentation::estimateNormals(thinned, grid, p.normal_k, viewpoint_in.cast<float>());
   watch.mark("normals");
 
