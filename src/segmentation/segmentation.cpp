@@ -1,5 +1,7 @@
 #include "door_state_recognition/segmentation/segmentation.hpp"
 
+#include "door_state_recognition/preprocess/cell_map.hpp"
+
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -13,25 +15,45 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
   out.n.assign(points.size(), Eigen::Vector3f::Zero());
   out.curvature.assign(points.size(), 1.0f);
   if (points.size() < 3 || k < 3) return out;
-  // Moments of every cell, once: count, sum and sum of outer products, taken
-  // about the cell's first point (numerically safe far from the origin).
+  // Moments of every cell, once: count, sum and sum of outer products, about
+  // one origin in the cloud (in double, exact enough for centimetre spreads
+  // up to max_abs_coordinate away), so that cells' moments simply add.
   struct Moments {
     double n = 0;
     Eigen::Vector3d s = Eigen::Vector3d::Zero();
     Eigen::Matrix3d ss = Eigen::Matrix3d::Zero();
+    void add(const Moments& b) {
+      n += b.n;
+      s += b.s;
+      ss += b.ss;
+    }
   };
   const std::size_t cells = grid.cells();
+  const Eigen::Vector3d origin = points.front().cast<double>();
   std::vector<Moments> m(cells);
-  std::vector<Eigen::Vector3d> origin(cells);
 #pragma omp parallel for schedule(static, 1024)
   for (long long c = 0; c < static_cast<long long>(cells); ++c) {
-    origin[c] = grid.point(*grid.cellBegin(c)).cast<double>();
     for (const int* it = grid.cellBegin(c); it != grid.cellEnd(c); ++it) {
-      const Eigen::Vector3d d = grid.point(*it).cast<double>() - origin[c];
+      const Eigen::Vector3d d = grid.point(*it).cast<double>() - origin;
       m[c].n += 1;
       m[c].s += d;
       m[c].ss += d * d.transpose();
     }
+  }
+  // A coarse level (cells twice as wide) for sparse surroundings: 27 coarse
+  // cells reach as far as 125 fine ones at a fifth of the lookups.
+  auto coarseOf = [&](std::size_t c) {
+    const Eigen::Vector3i& k3 = grid.coord(c);
+    auto half = [](int v) { return v >= 0 ? v / 2 : -((-v + 1) / 2); };
+    return Eigen::Vector3i(half(k3.x()), half(k3.y()), half(k3.z()));
+  };
+  preprocess::CellMap coarse_map(cells / 4 + 1);
+  std::vector<Moments> cm;
+  for (std::size_t c = 0; c < cells; ++c) {
+    const Eigen::Vector3i q = coarseOf(c);
+    const std::uint32_t id = coarse_map.insert(preprocess::packCell(q.x(), q.y(), q.z()));
+    if (id == cm.size()) cm.emplace_back();
+    cm[id].add(m[c]);
   }
   const int need = std::min(k, 8);
 #pragma omp parallel
@@ -39,18 +61,20 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
     std::vector<std::uint32_t> block;
 #pragma omp for schedule(dynamic, 256)
     for (long long c = 0; c < static_cast<long long>(cells); ++c) {
-      // PCA of the 3 x 3 x 3 cells around; 5 x 5 x 5 where that is sparse.
+      // PCA of the 3 x 3 x 3 cells around; of the 3 x 3 x 3 coarse cells
+      // around where that is sparse.
       Moments acc;
-      for (int ring = 1; ring <= 2; ++ring) {
-        grid.neighbourCells(static_cast<std::size_t>(c), ring, block);
+      grid.neighbourCells(static_cast<std::size_t>(c), 1, block);
+      for (std::uint32_t o : block) acc.add(m[o]);
+      if (acc.n < need) {
         acc = Moments();
-        for (std::uint32_t o : block) {
-          const Eigen::Vector3d t = origin[o] - origin[c];  // shift o's moments to c's origin
-          acc.n += m[o].n;
-          acc.s += m[o].s + m[o].n * t;
-          acc.ss += m[o].ss + m[o].s * t.transpose() + t * m[o].s.transpose() + m[o].n * t * t.transpose();
-        }
-        if (acc.n >= need) break;
+        const Eigen::Vector3i q = coarseOf(static_cast<std::size_t>(c));
+        for (int dz = -1; dz <= 1; ++dz)
+          for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+              const std::uint32_t o = coarse_map.find(preprocess::packCell(q.x() + dx, q.y() + dy, q.z() + dz));
+              if (o != preprocess::CellMap::kNone) acc.add(cm[o]);
+            }
       }
       if (acc.n < 3) continue;  // isolated: no normal (zero), curvature 1
       const Eigen::Vector3d mean = acc.s / acc.n;

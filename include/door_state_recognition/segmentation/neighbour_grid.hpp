@@ -25,6 +25,8 @@ class NeighbourGrid {
   float cell() const { return cell_; }
   std::size_t size() const { return pos_.size(); }
   std::size_t cells() const { return coord_.size(); }
+  // Integer coordinates of cell c (floor of position / cell).
+  const Eigen::Vector3i& coord(std::size_t c) const { return coord_[c]; }
   // Points of cell c, as indices into the points the grid was built on.
   const int* cellBegin(std::size_t c) const { return order_.data() + begin_[c]; }
   const int* cellEnd(std::size_t c) const { return order_.data() + begin_[c + 1]; }
