@@ -160,8 +160,15 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     const int c = static_cast<int>(std::floor((s - s_lo) / cell));
     return col_tol[std::clamp(c, 0, cols - 1)];
   };
-  for (const auto& pt : points) {
+  // Points at the wall's body height within its face and 0.6 m behind it:
+  // where the jambs and the wall's thickness are read below.
+  const double max_tol = *std::max_element(col_tol.begin(), col_tol.end());
+  std::vector<int> near_wall;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const auto& pt = points[i];
     const double d = wall.signedDistance(pt);
+    if (d >= -0.6 && d <= max_tol && pt.z() >= floor_z + 0.25 && pt.z() <= floor_z + 1.75)
+      near_wall.push_back(static_cast<int>(i));
     if (d >= d_view) continue;  // beside or behind the sensor
     const double s_pt = wall.along(pt);
     if (std::abs(d) <= tolAt(s_pt)) {
@@ -339,7 +346,8 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     // Jambs where the face points end, refined from the points themselves.
     double s0 = colS(lo), s1 = colS(hi + 1);
     std::vector<double> left, right;
-    for (const auto& pt : points) {
+    for (int i : near_wall) {
+      const auto& pt = points[i];
       const double a = wall.along(pt);
       if (std::abs(wall.signedDistance(pt)) > tolAt(a) || pt.z() < floor_z + 0.25 || pt.z() > floor_z + 1.75) continue;
       if (a > s0 - 0.12 && a < s0 + 0.06) left.push_back(a);
@@ -428,7 +436,8 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       }
     }
     std::vector<double> depth_l, depth_r;
-    for (const auto& pt : points) {
+    for (int i : near_wall) {
+      const auto& pt = points[i];
       const double dd = -wall.signedDistance(pt);
       const double a = wall.along(pt);
       if (dd < tolAt(a) || dd > 0.6 || pt.z() < floor_z + 0.25 || pt.z() > floor_z + 1.75) continue;
