@@ -10,6 +10,10 @@
 namespace dsr {
 namespace segmentation {
 
+// Curvature of a coarse neighbourhood above which a cell's normal is taken
+// from its fine neighbourhood: a plane with centimetre noise stays far below.
+constexpr float kRefineCurvature = 0.02f;
+
 Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, const Eigen::Vector3f& viewpoint) {
   Normals out;
   out.n.assign(points.size(), Eigen::Vector3f::Zero());
@@ -49,45 +53,68 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
   };
   preprocess::CellMap coarse_map(cells / 4 + 1);
   std::vector<Moments> cm;
+  std::vector<std::uint32_t> coarse_of(cells);
   for (std::size_t c = 0; c < cells; ++c) {
     const Eigen::Vector3i q = coarseOf(c);
     const std::uint32_t id = coarse_map.insert(preprocess::packCell(q.x(), q.y(), q.z()));
     if (id == cm.size()) cm.emplace_back();
     cm[id].add(m[c]);
+    coarse_of[c] = id;
   }
   const int need = std::min(k, 8);
+  struct Pca {
+    Eigen::Vector3f n = Eigen::Vector3f::Zero();
+    float curvature = 1.0f;
+    bool ok = false;
+  };
+  auto pca = [](const Moments& acc) {
+    Pca r;
+    if (acc.n < 3) return r;  // isolated: no normal (zero), curvature 1
+    const Eigen::Vector3d mean = acc.s / acc.n;
+    const Eigen::Matrix3d C = acc.ss / acc.n - mean * mean.transpose();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
+    es.computeDirect(C);
+    r.n = es.eigenvectors().col(0).cast<float>().normalized();
+    if (!r.n.allFinite()) return Pca();
+    const double sum = es.eigenvalues().sum();
+    r.curvature = sum > 0 ? static_cast<float>(std::max(0.0, es.eigenvalues()(0)) / sum) : 0.0f;
+    r.ok = true;
+    return r;
+  };
+  // Coarse normals first: the 3 x 3 x 3 coarse cells around each coarse cell.
+  std::vector<Pca> coarse(cm.size());
+  std::vector<Eigen::Vector3i> ccoord(cm.size());
+  for (std::size_t c = 0; c < cells; ++c) ccoord[coarse_of[c]] = coarseOf(c);
+#pragma omp parallel for schedule(dynamic, 256)
+  for (long long i = 0; i < static_cast<long long>(cm.size()); ++i) {
+    Moments acc;
+    const Eigen::Vector3i& q = ccoord[i];
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const std::uint32_t o = coarse_map.find(preprocess::packCell(q.x() + dx, q.y() + dy, q.z() + dz));
+          if (o != preprocess::CellMap::kNone) acc.add(cm[o]);
+        }
+    coarse[i] = pca(acc);
+  }
+  // Fine cells take the coarse normal where it is planar (most of a room);
+  // near edges, corners and thin parts the 3 x 3 x 3 fine cells around.
 #pragma omp parallel
   {
     std::vector<std::uint32_t> block;
 #pragma omp for schedule(dynamic, 256)
     for (long long c = 0; c < static_cast<long long>(cells); ++c) {
-      // PCA of the 3 x 3 x 3 cells around; of the 3 x 3 x 3 coarse cells
-      // around where that is sparse.
-      Moments acc;
-      grid.neighbourCells(static_cast<std::size_t>(c), 1, block);
-      for (std::uint32_t o : block) acc.add(m[o]);
-      if (acc.n < need) {
-        acc = Moments();
-        const Eigen::Vector3i q = coarseOf(static_cast<std::size_t>(c));
-        for (int dz = -1; dz <= 1; ++dz)
-          for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx) {
-              const std::uint32_t o = coarse_map.find(preprocess::packCell(q.x() + dx, q.y() + dy, q.z() + dz));
-              if (o != preprocess::CellMap::kNone) acc.add(cm[o]);
-            }
+      Pca r = coarse[coarse_of[c]];
+      if (!r.ok || r.curvature > kRefineCurvature) {
+        Moments acc;
+        grid.neighbourCells(static_cast<std::size_t>(c), 1, block);
+        for (std::uint32_t o : block) acc.add(m[o]);
+        if (acc.n >= need) r = pca(acc);
       }
-      if (acc.n < 3) continue;  // isolated: no normal (zero), curvature 1
-      const Eigen::Vector3d mean = acc.s / acc.n;
-      const Eigen::Matrix3d C = acc.ss / acc.n - mean * mean.transpose();
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
-      es.computeDirect(C);
-      const Eigen::Vector3f n = es.eigenvectors().col(0).cast<float>().normalized();
-      if (!n.allFinite()) continue;
-      const double sum = es.eigenvalues().sum();
-      const float curv = sum > 0 ? static_cast<float>(std::max(0.0, es.eigenvalues()(0)) / sum) : 0.0f;
+      if (!r.ok) continue;
       for (const int* it = grid.cellBegin(c); it != grid.cellEnd(c); ++it) {
-        out.n[*it] = n.dot(viewpoint - points[*it]) < 0 ? Eigen::Vector3f(-n) : n;
-        out.curvature[*it] = curv;
+        out.n[*it] = r.n.dot(viewpoint - points[*it]) < 0 ? Eigen::Vector3f(-r.n) : r.n;
+        out.curvature[*it] = r.curvature;
       }
     }
   }
