@@ -53,6 +53,12 @@ std::string validate(const sensor_msgs::PointCloud2& msg, std::size_t max_points
     if (static_cast<std::uint64_t>(f.offset) + s > msg.point_step)
       return std::string("field ") + name + " lies outside point_step";
   }
+  // x, y and z must not overlap (e.g. x declared FLOAT64 over a FLOAT32 y).
+  const Field f[3] = {find(msg, "x"), find(msg, "y"), find(msg, "z")};
+  for (int a = 0; a < 3; ++a)
+    for (int b = a + 1; b < 3; ++b)
+      if (f[a].offset < f[b].offset + size(f[b].type) && f[b].offset < f[a].offset + size(f[a].type))
+        return std::string("fields ") + "xyz"[a] + " and " + "xyz"[b] + " overlap";
   return "";
 }
 

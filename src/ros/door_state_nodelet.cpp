@@ -249,33 +249,31 @@ class DoorStateNodelet : public nodelet::Nodelet {
 
   // Subscriber (or tf filter) callback: hand the cloud to the worker through
   // the one-cloud slot. A cloud still waiting there is stale: dropped. So is
-  // a cloud older than one already taken: the tf filter releases the clouds
-  // it held for a late transform in no particular order. (When ROS time has
-  // gone back, e.g. a looped bag, older stamps are accepted again.)
+  // a cloud older than the one waiting or under way: the tf filter releases
+  // the clouds it held for a late transform all at once, in no particular
+  // order. (Once the worker is idle any stamp is taken: a bag played again,
+  // a restarted driver.)
   void cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg) {
     ++clouds_in_;
     const ros::WallTime received = ros::WallTime::now();
+    if (!worker_.joinable()) {
+      process(msg, received);
+      return;
+    }
     bool dropped = false;
     {
       std::lock_guard<std::mutex> lock(slot_mutex_);
       if (stop_) return;
-      const ros::Time stamp = msg->header.stamp;
-      if (stamp < newest_stamp_ && !(ros::Time::now() < newest_stamp_)) {
+      const ros::Time newest = pending_ ? pending_->header.stamp : busy_stamp_;
+      if ((pending_ || busy_) && msg->header.stamp < newest) {
         ++clouds_dropped_;
         NODELET_DEBUG_THROTTLE(5.0, "door_state: cloud at %.3f older than one at %.3f already taken: dropped",
-                               stamp.toSec(), newest_stamp_.toSec());
+                               msg->header.stamp.toSec(), newest.toSec());
         return;
       }
-      newest_stamp_ = stamp;
-      if (worker_.joinable()) {
-        dropped = static_cast<bool>(pending_);
-        pending_ = msg;
-        pending_received_ = received;
-      }
-    }
-    if (!worker_.joinable()) {
-      process(msg, received);
-      return;
+      dropped = static_cast<bool>(pending_);
+      pending_ = msg;
+      pending_received_ = received;
     }
     slot_cv_.notify_one();
     if (dropped) {
@@ -290,10 +288,13 @@ class DoorStateNodelet : public nodelet::Nodelet {
       ros::WallTime received;
       {
         std::unique_lock<std::mutex> lock(slot_mutex_);
+        busy_ = false;
         slot_cv_.wait(lock, [this] { return stop_ || pending_; });
         if (stop_) return;
         msg.swap(pending_);
         received = pending_received_;
+        busy_ = true;
+        busy_stamp_ = msg->header.stamp;
       }
       process(msg, received);
     }
@@ -494,7 +495,8 @@ class DoorStateNodelet : public nodelet::Nodelet {
   std::condition_variable slot_cv_;
   sensor_msgs::PointCloud2ConstPtr pending_;
   ros::WallTime pending_received_;
-  ros::Time newest_stamp_;  // of the newest cloud taken into the slot
+  bool busy_ = false;  // the worker is processing a cloud stamped busy_stamp_
+  ros::Time busy_stamp_;
   bool stop_ = false;
   std::thread worker_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;

@@ -12,6 +12,7 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include <diagnostic_msgs/DiagnosticArray.h>
+#include <rosgraph_msgs/Log.h>
 
 #include <cmath>
 #include <fstream>
@@ -222,45 +223,229 @@ TEST_F(NodeletTest, DoorsOfASimulatedScanMatchTheTruthWithStableIdsAndMarkers) {
     EXPECT_TRUE(namespaces.count(ns)) << "no marker in namespace " << ns;
 }
 
-TEST_F(NodeletTest, MalformedCloudsAreAnsweredEmptyAndAGoodCloudStillWorks) {
+namespace {
+
+// A cloud of the given points with x, y, z only, FLOAT32 or FLOAT64.
+sensor_msgs::PointCloud2 xyzCloud(const std::vector<Eigen::Vector3d>& pts, std::uint8_t type, const std::string& frame) {
+  sensor_msgs::PointCloud2 m;
+  m.header.frame_id = frame;
+  const std::uint32_t size = type == sensor_msgs::PointField::FLOAT64 ? 8 : 4;
+  for (std::uint32_t k = 0; k < 3; ++k) {
+    sensor_msgs::PointField f;
+    f.name = std::string(1, "xyz"[k]);
+    f.offset = k * size;
+    f.datatype = type;
+    f.count = 1;
+    m.fields.push_back(f);
+  }
+  m.height = 1;
+  m.width = static_cast<std::uint32_t>(pts.size());
+  m.point_step = 3 * size;
+  m.row_step = m.width * m.point_step;
+  m.is_dense = false;
+  m.data.resize(static_cast<std::size_t>(m.row_step));
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    for (int k = 0; k < 3; ++k) {
+      std::uint8_t* dst = &m.data[i * m.point_step + k * size];
+      if (size == 8) {
+        const double v = pts[i][k];
+        std::memcpy(dst, &v, 8);
+      } else {
+        const float v = static_cast<float>(pts[i][k]);
+        std::memcpy(dst, &v, 4);
+      }
+    }
+  return m;
+}
+
+std::vector<Eigen::Vector3d> pointsOf(const sim::SimulatedCloud& c) {
+  std::vector<Eigen::Vector3d> pts;
+  for (const auto& p : c.cloud.points) pts.emplace_back(p.x, p.y, p.z);
+  return pts;
+}
+
+struct RosoutLog {
+  std::mutex m;
+  std::vector<rosgraph_msgs::Log> logs;
+  ros::Subscriber sub;
+  void start(ros::NodeHandle& nh) {
+    sub = nh.subscribe<rosgraph_msgs::Log>("/rosout", 1000, [this](const rosgraph_msgs::LogConstPtr& l) {
+      std::lock_guard<std::mutex> g(m);
+      logs.push_back(*l);
+    });
+  }
+  // A message from the nodelet at `level` or above whose text holds every one of `words`.
+  bool has(std::uint8_t level, const std::vector<std::string>& words) {
+    std::lock_guard<std::mutex> g(m);
+    for (const auto& l : logs) {
+      if (l.name != "/door_state" || l.level < level) continue;
+      bool all = true;
+      for (const auto& w : words) all = all && l.msg.find(w) != std::string::npos;
+      if (all) return true;
+    }
+    return false;
+  }
+  ~RosoutLog() { sub.shutdown(); }
+};
+
+}  // namespace
+
+// Issue 6: the catalogue of hostile PointCloud2 messages. Each is answered
+// with a DoorStateArray carrying its own header (stamp and frame): empty for
+// a malformed or degenerate cloud, a valid one for an unusual but readable
+// cloud; malformed ones are counted as refused in the diagnostics and logged
+// as an error, degenerate ones as a warning; and a good cloud afterwards is
+// still processed right.
+TEST_F(NodeletTest, HostileCloudsAreAnsweredAndAGoodCloudStillWorks) {
   if (g_mode != "direct") GTEST_SKIP();
+  RosoutLog rosout;
+  rosout.start(nh_);
   listen();
   const SimScan scan = simulate("paper_livingroom", 5);
   const sensor_msgs::PointCloud2 good = toMsg(scan.cloud, "tls_scanner", 100.0);
-  std::vector<std::pair<std::string, sensor_msgs::PointCloud2>> bad;
-  auto variant = [&](const std::string& name, const std::function<void(sensor_msgs::PointCloud2&)>& spoil) {
+  const std::vector<Eigen::Vector3d> pts = pointsOf(scan.cloud);
+  const auto before = diagnostics(ros::WallTime::now());
+  ASSERT_TRUE(before.count("clouds refused (malformed)"));
+
+  enum class Expect { Refused, Degenerate, Valid, Truth };
+  struct Case {
+    std::string name;
+    sensor_msgs::PointCloud2 msg;
+    Expect expect;
+  };
+  std::vector<Case> cases;
+  auto variant = [&](const std::string& name, Expect e, const std::function<void(sensor_msgs::PointCloud2&)>& spoil) {
     sensor_msgs::PointCloud2 m = good;
     spoil(m);
-    bad.emplace_back(name, m);
+    cases.push_back({name, m, e});
   };
-  variant("data shorter than width*height*point_step", [](auto& m) { m.data.resize(m.data.size() / 2); });
-  variant("data longer", [](auto& m) { m.data.resize(m.data.size() + 7); });
-  variant("no z field", [](auto& m) { m.fields.erase(m.fields.begin() + 2); });
-  variant("x as uint8", [](auto& m) { m.fields[0].datatype = sensor_msgs::PointField::UINT8; });
-  variant("point_step smaller than the fields", [](auto& m) { m.point_step = 8; m.row_step = m.width * 8; m.data.resize(m.row_step); });
-  variant("width*height overflowing", [](auto& m) { m.width = 0xFFFFFFFFu; m.height = 0xFFFFFFFFu; });
-  variant("empty", [](auto& m) { m.width = 0; m.row_step = 0; m.data.clear(); });
-  variant("all NaN", [](auto& m) {
-    const float nan = std::numeric_limits<float>::quiet_NaN();
-    for (std::size_t i = 0; i + 12 <= m.data.size(); i += m.point_step)
-      for (int k = 0; k < 3; ++k) std::memcpy(&m.data[i + 4 * k], &nan, 4);
-  });
+  auto made = [&](const std::string& name, Expect e, const std::vector<Eigen::Vector3d>& p,
+                  std::uint8_t type = sensor_msgs::PointField::FLOAT32) {
+    cases.push_back({name, xyzCloud(p, type, "tls_scanner"), e});
+  };
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+
+  // Malformed: refused by the conversion, without allocating for what the header promises.
+  variant("data shorter than width*height*point_step", Expect::Refused, [](auto& m) { m.data.resize(m.data.size() / 2); });
+  variant("data longer", Expect::Refused, [](auto& m) { m.data.resize(m.data.size() + 7); });
+  variant("no z field", Expect::Refused, [](auto& m) { m.fields.erase(m.fields.begin() + 2); });
+  variant("x as uint8", Expect::Refused, [](auto& m) { m.fields[0].datatype = sensor_msgs::PointField::UINT8; });
+  variant("x as float64 overlapping y", Expect::Refused, [](auto& m) { m.fields[0].datatype = sensor_msgs::PointField::FLOAT64; });
+  variant("x with count 3", Expect::Refused, [](auto& m) { m.fields[0].count = 3; });
+  variant("x twice", Expect::Refused, [](auto& m) { m.fields.push_back(m.fields[0]); });
+  variant("x beyond point_step", Expect::Refused, [](auto& m) { m.fields[0].offset = m.point_step; });
+  variant("big-endian", Expect::Refused, [](auto& m) { m.is_bigendian = true; });
+  variant("point_step smaller than the fields", Expect::Refused, [](auto& m) { m.point_step = 8; m.row_step = m.width * 8; m.data.resize(m.row_step); });
+  variant("point_step 0", Expect::Refused, [](auto& m) { m.point_step = 0; m.row_step = 0; });
+  variant("row_step inconsistent", Expect::Refused, [](auto& m) { m.row_step += 4; });
+  variant("width*height overflowing", Expect::Refused, [](auto& m) { m.width = 0xFFFFFFFFu; m.height = 0xFFFFFFFFu; });
+  // 20 million points promised by the header, the data of a 300k cloud:
+  // refused on the size, before anything is allocated for them.
+  variant("header claims 20M points, short data", Expect::Refused, [](auto& m) { m.width = 20000000; m.height = 1; m.row_step = m.width * m.point_step; });
+  // 60 million points: above max_points (50 million) whatever the data.
+  variant("header claims 60M points (> max_points)", Expect::Refused, [](auto& m) { m.width = 60000000; m.height = 1; m.row_step = m.width * m.point_step; });
+
+  // Readable but degenerate: processed, no walls, an empty answer.
+  variant("empty", Expect::Degenerate, [](auto& m) { m.width = 0; m.row_step = 0; m.data.clear(); });
+  made("one point", Expect::Degenerate, {Eigen::Vector3d(1, 2, 0.5)});
+  made("all NaN", Expect::Degenerate, std::vector<Eigen::Vector3d>(5000, Eigen::Vector3d(nan, nan, nan)));
+  made("all Inf", Expect::Degenerate, std::vector<Eigen::Vector3d>(5000, Eigen::Vector3d(inf, -inf, inf)));
+  made("all 1e30", Expect::Degenerate, std::vector<Eigen::Vector3d>(5000, Eigen::Vector3d(1e30, -1e30, 1e30)));
+  made("every point identical", Expect::Degenerate, std::vector<Eigen::Vector3d>(5000, Eigen::Vector3d(1.5, -0.5, 1.0)));
+  {
+    std::vector<Eigen::Vector3d> line, plane;
+    for (int i = 0; i < 20000; ++i) line.emplace_back(0.5 + 0.0002 * i, 1.0 + 0.0001 * i, 1.2);
+    for (int i = 0; i < 200; ++i)
+      for (int j = 0; j < 200; ++j) plane.emplace_back(-2.0 + 0.02 * i, -2.0 + 0.02 * j, -1.0);
+    made("all points on one line", Expect::Degenerate, line);
+    made("all points on one horizontal plane", Expect::Degenerate, plane);
+  }
+
+  // Readable and unusual: a valid answer.
+  made("x, y, z as float64", Expect::Truth, pts, sensor_msgs::PointField::FLOAT64);
+  {
+    std::vector<Eigen::Vector3d> spiked = pts;
+    for (std::size_t i = 0; i < spiked.size(); i += 50) spiked[i] = i % 150 == 0 ? Eigen::Vector3d(nan, 0, 0) : i % 100 == 0 ? Eigen::Vector3d(inf, 1, 1) : Eigen::Vector3d(1e30, 1e30, -1e30);
+    made("2 % of the points NaN, Inf or 1e30", Expect::Truth, spiked);
+    // The cloud's up axis is +x while the nodelet is told +z (refined within
+    // 15 deg only): whatever it finds, the answer is well formed.
+    std::vector<Eigen::Vector3d> tipped;
+    for (const auto& p : pts) tipped.emplace_back(p.z(), p.y(), -p.x());
+    made("wrong up axis (+x up, nodelet told +z)", Expect::Valid, tipped);
+  }
+
   double stamp = 200.0;
-  for (auto& [name, msg] : bad) {
-    SCOPED_TRACE(name);
-    msg.header.stamp = ros::Time(stamp += 1.0);
+  std::size_t refused = 0, degenerate = 0;
+  for (auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    c.msg.header.stamp = ros::Time(stamp += 1.0);
     DoorStateArray answer;
-    // An empty answer with the input's header, or none at all; never doors, never a crash.
-    if (send(msg, &answer, 10.0)) {
-      EXPECT_TRUE(answer.doors.empty());
-      EXPECT_EQ(answer.header.frame_id, msg.header.frame_id);
+    ASSERT_TRUE(send(c.msg, &answer, 60.0)) << "no answer";
+    EXPECT_EQ(answer.header.frame_id, c.msg.header.frame_id);
+    switch (c.expect) {
+      case Expect::Refused:
+        ++refused;
+        EXPECT_TRUE(answer.doors.empty());
+        break;
+      case Expect::Degenerate:
+        ++degenerate;
+        EXPECT_TRUE(answer.doors.empty());
+        break;
+      case Expect::Truth:
+        expectMatchesTruth(answer, scan.truth, Eigen::Isometry3d::Identity());
+        break;
+      case Expect::Valid:
+        for (const auto& d : answer.doors) {
+          EXPECT_TRUE(std::isfinite(d.opening_angle) && std::isfinite(d.hinge.x) && std::isfinite(d.width));
+          EXPECT_LE(d.state, 2);
+        }
+        break;
     }
   }
   sensor_msgs::PointCloud2 after = good;
   after.header.stamp = ros::Time(stamp + 1.0);
   DoorStateArray answer;
-  ASSERT_TRUE(send(after, &answer)) << "the nodelet stopped answering after malformed input";
+  ASSERT_TRUE(send(after, &answer)) << "the nodelet stopped answering after hostile input";
   expectMatchesTruth(answer, scan.truth, Eigen::Isometry3d::Identity());
+
+  // Every malformed cloud was refused by the conversion (not by luck further
+  // on), every degenerate one was processed and found no walls.
+  const auto diag = diagnostics(ros::WallTime::now());
+  auto delta = [&](const char* key) { return std::stoul(diag.at(key)) - std::stoul(before.at(key)); };
+  EXPECT_EQ(delta("clouds refused (malformed)"), refused);
+  EXPECT_GE(delta("clouds without walls"), degenerate);
+  // Logged (throttled: at least once each), by the nodelet.
+  EXPECT_TRUE(waitFor([&] { return rosout.has(rosgraph_msgs::Log::ERROR, {"malformed cloud"}); }, 10.0));
+  EXPECT_TRUE(waitFor([&] { return rosout.has(rosgraph_msgs::Log::WARN, {"no walls"}); }, 10.0));
+}
+
+// max_points refuses a well-formed cloud above it (set low through
+// dynamic_reconfigure, then set back).
+TEST_F(NodeletTest, ACloudAboveMaxPointsIsRefused) {
+  if (g_mode != "direct") GTEST_SKIP();
+  listen();
+  auto set = [&](int max_points) {
+    dynamic_reconfigure::Reconfigure srv;
+    dynamic_reconfigure::IntParameter p;
+    p.name = "max_points";
+    p.value = max_points;
+    srv.request.config.ints.push_back(p);
+    return ros::service::call("/door_state/set_parameters", srv);
+  };
+  const auto before = diagnostics(ros::WallTime::now());
+  ASSERT_TRUE(set(1000));
+  std::vector<Eigen::Vector3d> pts;
+  for (int i = 0; i < 2000; ++i) pts.emplace_back(0.001 * i, 1.0, 0.5);
+  sensor_msgs::PointCloud2 big = xyzCloud(pts, sensor_msgs::PointField::FLOAT32, "tls_scanner");
+  big.header.stamp = ros::Time(700.0);
+  DoorStateArray answer;
+  const bool answered = send(big, &answer, 30.0);
+  const auto diag = diagnostics(ros::WallTime::now());
+  ASSERT_TRUE(set(50000000));
+  ASSERT_TRUE(answered);
+  EXPECT_TRUE(answer.doors.empty());
+  EXPECT_EQ(std::stoul(diag.at("clouds refused (malformed)")), std::stoul(before.at("clouds refused (malformed)")) + 1);
+  EXPECT_NE(diag.at("last error").find("max_points"), std::string::npos) << diag.at("last error");
 }
 
 TEST_F(NodeletTest, WithoutTfTheCloudIsDroppedAndProcessedOnceTfArrives) {
@@ -369,6 +554,76 @@ TEST_F(NodeletTest, StaleCloudsAreDroppedUnderABurst) {
   ASSERT_TRUE(diag.count("clouds dropped (stale)")) << "no drop counter in the diagnostics";
   EXPECT_GE(std::stoul(diag.at("clouds dropped (stale)")), 1u);
   EXPECT_GE(std::stoul(diag.at("clouds processed")), stamps.size());
+}
+
+// Issue 6: values the .cfg ranges let through but the pipeline refuses
+// (out of its range, NaN, inconsistent with another parameter, an unknown up
+// axis) are refused through dynamic_reconfigure as from YAML: a clear error
+// naming the parameter, the previous configuration stays in force, and the
+// server hands the previous values back (service response, parameter server).
+TEST_F(NodeletTest, ReconfigureRefusesBadValuesAndKeepsThePreviousOnes) {
+  if (g_mode != "direct") GTEST_SKIP();
+  RosoutLog rosout;
+  rosout.start(nh_);
+  listen();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  struct Case {
+    std::string name;
+    std::vector<std::pair<std::string, double>> doubles;
+    std::vector<std::pair<std::string, std::string>> strs;
+    std::string named;  // the refusal names this parameter
+  };
+  const std::vector<Case> cases = {
+      // open_from_deg 115 alone is valid (and would make the 110.6 deg door
+      // semi-open): it must not slip in with the refused voxel size.
+      {"voxel_size 0.0005 (cfg: [0, 1]; pipeline: 0 or >= 0.001)", {{"voxel_size", 0.0005}, {"open_from_deg", 115.0}}, {}, "voxel_size"},
+      {"wall_distance NaN", {{"wall_distance", nan}}, {}, "wall_distance"},
+      {"closed_below_deg 50 above open_from_deg 30", {{"closed_below_deg", 50.0}, {"open_from_deg", 30.0}}, {}, "closed_below_deg"},
+      {"door_min_width 1.3 above door_max_width 1.0", {{"door_min_width", 1.3}, {"door_max_width", 1.0}}, {}, "door_min_width"},
+      {"up_axis 'sideways'", {}, {{"up_axis", "sideways"}}, "up_axis"},
+  };
+  const std::map<std::string, double> in_force = {{"voxel_size", 0.02}, {"open_from_deg", 90.0}, {"wall_distance", 0.03},
+                                                  {"closed_below_deg", 5.0}, {"door_min_width", 0.6}, {"door_max_width", 1.4}};
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    dynamic_reconfigure::Reconfigure srv;
+    for (const auto& [name, value] : c.doubles) {
+      dynamic_reconfigure::DoubleParameter d;
+      d.name = name;
+      d.value = value;
+      srv.request.config.doubles.push_back(d);
+    }
+    for (const auto& [name, value] : c.strs) {
+      dynamic_reconfigure::StrParameter d;
+      d.name = name;
+      d.value = value;
+      srv.request.config.strs.push_back(d);
+    }
+    ASSERT_TRUE(ros::service::call("/door_state/set_parameters", srv));
+    // The response and the parameter server hold the values in force.
+    for (const auto& d : srv.response.config.doubles)
+      if (in_force.count(d.name)) EXPECT_EQ(d.value, in_force.at(d.name)) << d.name << " in the service response";
+    for (const auto& d : srv.response.config.strs)
+      if (d.name == "up_axis") EXPECT_EQ(d.value, "+z") << "up_axis in the service response";
+    for (const auto& [name, value] : in_force) {
+      double v = -1;
+      EXPECT_TRUE(nh_.getParam("/door_state/" + name, v));
+      EXPECT_EQ(v, value) << "/door_state/" << name << " on the parameter server";
+    }
+    std::string up;
+    EXPECT_TRUE(nh_.getParam("/door_state/up_axis", up));
+    EXPECT_EQ(up, "+z");
+    EXPECT_TRUE(waitFor([&] { return rosout.has(rosgraph_msgs::Log::ERROR, {"parameters refused", c.named}); }, 10.0))
+        << "no error naming " << c.named;
+  }
+  EXPECT_TRUE(rosout.has(rosgraph_msgs::Log::ERROR, {"wall_distance = NaN"}));
+  // The previous parameters are in force: the 110.6 deg door is still open
+  // (open_from_deg 115 of the first refused request did not slip in).
+  const SimScan scan = simulate("paper_house", 11);
+  DoorStateArray answer;
+  ASSERT_TRUE(send(toMsg(scan.cloud, "tls_scanner", 800.0), &answer));
+  ASSERT_EQ(answer.doors.size(), 1u);
+  EXPECT_EQ(answer.doors[0].state, door_state_recognition::DoorState::OPEN);
 }
 
 TEST(Reconfigure, CfgDefaultsAreTheCodesDefaults) {

@@ -13,7 +13,7 @@ namespace ros_io {
 
 // Empty string when the cloud can be read; otherwise what is wrong, one line.
 // Accepts x, y, z as FLOAT32 or FLOAT64, little-endian, COUNT 1, inside
-// point_step; requires width*height*point_step == data.size() (no overflow)
+// point_step, not overlapping; requires width*height*point_step == data.size() (no overflow)
 // and row_step >= width*point_step.
 std::string validate(const sensor_msgs::PointCloud2& msg, std::size_t max_points);
 
