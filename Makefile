@@ -47,6 +47,18 @@ demo: build
 bench: build
 	@$(REPO)/scripts/bench.sh
 
+.PHONY: latency soak
+# The nodelet's latency from cloud in (stamped at publish) to DoorStateArray
+# out, simulated clouds at 30 Hz (overload) and at a slow rate;
+# LATENCY_SECONDS per case (default 30). Figures in $(BUILD)/latency/.
+latency: build
+	@$(REPO)/scripts/nodelet_latency.sh
+
+# Simulated bags in a loop through the nodelet at 10 Hz for SOAK_SECONDS
+# (default 600): clouds processed and dropped, latency, resident memory.
+soak: build
+	@$(REPO)/scripts/soak.sh
+
 rviz-shot: build
 	@$(REPO)/scripts/rviz_shot.sh
 

@@ -1,0 +1,101 @@
+#!/usr/bin/env bash
+# make latency: end-to-end latency of the door-state nodelet, from a
+# PointCloud2 published (stamped at publish time) to the DoorStateArray that
+# answers it, for simulated clouds played at a fixed rate from a rosbag.
+#
+#   scripts/nodelet_latency.sh [CASE ...]     (default: rgbd30 tls30 rgbd2 tls05)
+#
+# Cases (clouds from door_scene_sim, seed 7, bags cached in $DSR_BUILD/latency):
+#   rgbd30  one 640x480 RGB-D frame at 30 Hz (a camera's rate: overload)
+#   tls30   a 400k-ray laser scan at 30 Hz (overload)
+#   rgbd2   the RGB-D frame at 2 Hz (no overload: latency of one cloud)
+#   tls05   the laser scan at 0.5 Hz (no overload)
+#   soak    both bags in turn at 10 Hz through tf (~fixed_frame map), for
+#           SOAK_SECONDS (default 600): scripts/soak.sh
+#
+# Each case starts its own nodelet manager with the nodelet loaded into it
+# (config/default.yaml, up axis of the cloud), under a roscore of its own on
+# a free port, runs build/bin/door_state_latency, and stops what it started,
+# by PID. Seconds per case: LATENCY_SECONDS (default 30). Figures also go to
+# $DSR_BUILD/latency/<case>.json.
+set -euo pipefail
+REPO="$(cd "$(dirname "$0")/.." && pwd)"
+BUILD="${DSR_BUILD:-$REPO/build}"
+BIN="$BUILD/bin"
+OUT="$BUILD/latency"
+SECS="${LATENCY_SECONDS:-30}"
+mkdir -p "$OUT"
+export PATH=/usr/bin:$PATH
+set +u; source "$BUILD/.ws/devel/setup.bash"; set -u
+export ROS_LOG_DIR="$OUT/log"
+PORT="${LATENCY_ROS_PORT:-$((20000 + RANDOM % 20000))}"
+export ROS_MASTER_URI="http://localhost:$PORT"
+CASES=("$@")
+[ ${#CASES[@]} -gt 0 ] || CASES=(rgbd30 tls30 rgbd2 tls05)
+
+for exe in door_scene_sim door_state_latency; do
+  [ -x "$BIN/$exe" ] || { echo "nodelet_latency: $BIN/$exe missing: run make build first" >&2; exit 2; }
+done
+
+bag() {  # bag PREFIX SIM-ARGS...: simulate once, reuse afterwards
+  local prefix="$1"; shift
+  [ -s "$prefix.bag" ] || "$BIN/door_scene_sim" --quiet --formats bag,json --bag-count 1 --out "$prefix" "$@"
+}
+bag "$OUT/tls400k" --seed 7 --points 400000
+bag "$OUT/rgbd" --sensor rgbd --seed 7
+
+CORE="" MGR="" LOADER="" FAILED=0
+stop() {  # stop PID: SIGINT, then wait for it (only processes this script started)
+  local pid="$1"
+  [ -n "$pid" ] || return 0
+  kill -INT "$pid" 2>/dev/null || true
+  for _ in $(seq 100); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
+  kill -KILL "$pid" 2>/dev/null || true
+  wait "$pid" 2>/dev/null || true
+}
+cleanup() { stop "$LOADER"; stop "$MGR"; stop "$CORE"; }
+trap cleanup EXIT
+
+roscore -p "$PORT" >"$OUT/roscore.log" 2>&1 &
+CORE=$!
+for _ in $(seq 150); do rosparam list >/dev/null 2>&1 && break; sleep 0.2; done
+rosparam list >/dev/null 2>&1 || { echo "nodelet_latency: roscore on port $PORT did not come up" >&2; exit 1; }
+
+run() {  # run LABEL RATE SECONDS UP_AXIS FIXED_FRAME BAG...
+  local label="$1" rate="$2" secs="$3" up="$4" fixed="$5"; shift 5
+  local bags=() tf=()
+  for b in "$@"; do bags+=(--bag "$b"); done
+  [ -z "$fixed" ] || tf=(--tf)
+  rosparam delete /door_state >/dev/null 2>&1 || true
+  rosparam load "$REPO/config/default.yaml" /door_state
+  rosparam set /door_state/up_axis "'$up'"  # quoted YAML: a leading '-' is no option
+  [ -z "$fixed" ] || rosparam set /door_state/fixed_frame "$fixed"
+  /usr/lib/nodelet/nodelet manager __name:=dsr_manager >"$OUT/$label.manager.log" 2>&1 &
+  MGR=$!
+  /usr/lib/nodelet/nodelet load door_state_recognition/DoorStateNodelet dsr_manager __name:=door_state \
+    >"$OUT/$label.nodelet.log" 2>&1 &
+  LOADER=$!
+  "$BIN/door_state_latency" "${bags[@]}" "${tf[@]}" --rate "$rate" --seconds "$secs" --pid "$MGR" \
+    --label "$label" --json "$OUT/$label.json" || { echo "nodelet_latency: case $label failed (logs in $OUT)" >&2; FAILED=1; }
+  if kill -0 "$MGR" 2>/dev/null; then
+    echo "  nodelet manager still running at the end: yes"
+  else
+    echo "nodelet_latency: the nodelet manager died during case $label (log: $OUT/$label.manager.log)" >&2
+    FAILED=1
+  fi
+  stop "$LOADER"; LOADER=""
+  stop "$MGR"; MGR=""
+}
+
+echo "== nodelet latency, $(nproc) cores, cases: ${CASES[*]} (${SECS} s each, soak ${SOAK_SECONDS:-600} s); stamp at publish -> DoorStateArray received"
+for c in "${CASES[@]}"; do
+  case "$c" in
+    rgbd30) run rgbd30 30 "$SECS" -y "" "$OUT/rgbd.bag" ;;
+    tls30)  run tls30 30 "$SECS" +z "" "$OUT/tls400k.bag" ;;
+    rgbd2)  run rgbd2 2 "$SECS" -y "" "$OUT/rgbd.bag" ;;
+    tls05)  run tls05 0.5 "$SECS" +z "" "$OUT/tls400k.bag" ;;
+    soak)   run "soak" 10 "${SOAK_SECONDS:-600}" +z map "$OUT/tls400k.bag" "$OUT/rgbd.bag" ;;
+    *) echo "nodelet_latency: unknown case '$c' (rgbd30 tls30 rgbd2 tls05 soak)" >&2; exit 2 ;;
+  esac
+done
+exit "$FAILED"
