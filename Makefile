@@ -1,7 +1,8 @@
 # door_state_recognition: one-command set-up.
 #   make demo   install what is missing, build, simulate a scene, show the result
 #   make test   install what is missing, build, run every test
-# Also: make build, make bench, make clean.
+# Also: make build, make bench, make clean, make sanitize (ASan+UBSan tests,
+# part of make test), make fuzz (libFuzzer targets, FUZZ_SECONDS each).
 SHELL := /bin/bash
 REPO  := $(abspath $(dir $(lastword $(MAKEFILE_LIST))))
 # BUILD may be moved (make build BUILD=/tmp/other) to keep a second workspace
@@ -17,7 +18,8 @@ export PATH := /usr/bin:$(PATH)
 CATKIN_ARGS := -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 \
                -DPython3_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=ON
 
-.PHONY: deps build test demo bench clean rviz-shot
+.PHONY: deps build test demo bench clean rviz-shot sanitize fuzz
+FUZZ_SECONDS ?= 60
 
 deps:
 	@$(REPO)/scripts/install_deps.sh
@@ -40,6 +42,17 @@ test: build
 	  grep -E "^\[  (PASSED|FAILED)  \]|^\[==========\] .* ran|Failure|rostest|FAILURE" $(BUILD)/run_tests.log | tail -n 60; \
 	  catkin_test_results build/test_results | tail -n 1; \
 	  /usr/bin/python3 $(REPO)/scripts/test_summary.py build/test_results
+	@$(REPO)/test/sanitize/run.sh $(BUILD)/asan $(JOBS)
+
+# The ROS-free core, simulator and their gtest tests built with AddressSanitizer
+# + UndefinedBehaviorSanitizer (gcc) in $(BUILD)/asan and run; any report fails.
+sanitize: deps
+	@$(REPO)/test/sanitize/run.sh $(BUILD)/asan $(JOBS)
+
+# libFuzzer targets (clang 14) built in $(BUILD)/fuzz, each run FUZZ_SECONDS
+# from the seed corpus fuzz/corpus/; fails on any crash.
+fuzz: deps
+	@JOBS=$(JOBS) $(REPO)/fuzz/run.sh $(BUILD)/fuzz $(FUZZ_SECONDS)
 
 demo: build
 	@$(REPO)/scripts/demo.sh

@@ -21,6 +21,8 @@ PKGS=(
   libtf2-msgs-dev librosbag-storage-dev
   nlohmann-json3-dev libyaml-cpp-dev
   rviz xvfb imagemagick
+  libasan8 libubsan1
+  clang-14 libclang-rt-14-dev
 )
 
 missing=()
