@@ -1,0 +1,147 @@
+// The search structures the speed of the pipeline rests on, checked against
+// brute force on random points (seeds printed): the flat cell hash, the voxel
+// grid, the neighbour grid and the normals from cell moments.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <random>
+#include <tuple>
+
+#include "door_state_recognition/preprocess/cell_map.hpp"
+#include "door_state_recognition/preprocess/preprocess.hpp"
+#include "door_state_recognition/segmentation/neighbour_grid.hpp"
+#include "door_state_recognition/segmentation/segmentation.hpp"
+
+using namespace dsr;
+
+namespace {
+
+std::vector<Eigen::Vector3f> randomPoints(unsigned seed, std::size_t n, float half, const Eigen::Vector3f& centre) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-half, half);
+  std::vector<Eigen::Vector3f> pts(n);
+  for (auto& p : pts) p = centre + Eigen::Vector3f(u(rng), u(rng), u(rng));
+  return pts;
+}
+
+}  // namespace
+
+TEST(CellMap, NumbersKeysInOrderOfFirstInsertionAndFindsThemAfterGrowing) {
+  preprocess::CellMap map(4);
+  std::vector<std::uint64_t> keys;
+  for (int i = 0; i < 5000; ++i) keys.push_back(preprocess::packCell(i * 7 - 9000, -i, i % 13));
+  for (std::size_t i = 0; i < keys.size(); ++i) EXPECT_EQ(map.insert(keys[i]), i);
+  for (std::size_t i = 0; i < keys.size(); ++i) EXPECT_EQ(map.insert(keys[i]), i);  // again: same number
+  EXPECT_EQ(map.size(), keys.size());
+  for (std::size_t i = 0; i < keys.size(); ++i) EXPECT_EQ(map.find(keys[i]), i);
+  EXPECT_EQ(map.find(preprocess::packCell(1, 1, 1) + 12345), preprocess::CellMap::kNone);
+}
+
+TEST(VoxelGrid, EqualsANaiveCentroidPerVoxelInFirstSeenOrder) {
+  for (unsigned seed : {1u, 2u, 3u}) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    // Far from the origin and on both sides of zero (negative cells).
+    const auto pts = randomPoints(seed, 20000, 0.5f, seed == 3 ? Eigen::Vector3f(1000, -2000, 5) : Eigen::Vector3f::Zero());
+    const double leaf = 0.05;
+    std::map<std::tuple<long, long, long>, std::pair<Eigen::Vector3d, int>> cells;
+    std::vector<std::tuple<long, long, long>> order;
+    for (const auto& p : pts) {
+      const auto k = std::make_tuple(static_cast<long>(std::floor(p.x() * (1 / leaf))), static_cast<long>(std::floor(p.y() * (1 / leaf))),
+                                     static_cast<long>(std::floor(p.z() * (1 / leaf))));
+      auto it = cells.find(k);
+      if (it == cells.end()) {
+        cells[k] = {p.cast<double>(), 1};
+        order.push_back(k);
+      } else {
+        it->second.first += p.cast<double>();
+        ++it->second.second;
+      }
+    }
+    const auto out = preprocess::voxelDownsample(pts, leaf);
+    ASSERT_EQ(out.size(), order.size());
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      const auto& c = cells[order[i]];
+      EXPECT_LT((out[i] - (c.first / c.second).cast<float>()).norm(), 1e-3f) << "voxel " << i;
+    }
+  }
+}
+
+TEST(NeighbourGrid, FindsExactlyThePointsWithinTheRadius) {
+  for (unsigned seed : {11u, 12u}) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const auto pts = randomPoints(seed, 3000, 0.4f, Eigen::Vector3f(-3, 2, 0));
+    const float cell = 0.05f;
+    const segmentation::NeighbourGrid grid(pts, cell);
+    ASSERT_EQ(grid.size(), pts.size());
+    std::vector<int> idx;
+    std::vector<float> d2;
+    for (float r : {0.03f, 0.05f, 0.09f}) {  // within one cell, and up to two
+      for (int i = 0; i < 300; ++i) {
+        grid.within(i, r, idx, d2);
+        std::vector<int> expect;
+        for (int j = 0; j < static_cast<int>(pts.size()); ++j)
+          if (j != i && (pts[j] - pts[i]).squaredNorm() <= r * r) expect.push_back(j);
+        std::sort(idx.begin(), idx.end());
+        EXPECT_EQ(idx, expect) << "point " << i << " radius " << r;
+      }
+    }
+    // Every point sits in exactly one cell, and the cell's neighbours include it.
+    std::vector<int> seen(pts.size(), 0);
+    std::vector<std::uint32_t> nbs;
+    for (std::size_t c = 0; c < grid.cells(); ++c) {
+      for (const int* it = grid.cellBegin(c); it != grid.cellEnd(c); ++it) ++seen[*it];
+      grid.neighbourCells(c, 1, nbs);
+      EXPECT_NE(std::find(nbs.begin(), nbs.end(), c), nbs.end());
+    }
+    EXPECT_TRUE(std::all_of(seen.begin(), seen.end(), [](int s) { return s == 1; }));
+  }
+}
+
+TEST(Normals, PlanesGetTheirNormalTowardsTheViewpointAndEdgesACurvature) {
+  // Two perpendicular planes sampled at 2 cm with 2 mm noise: a floor z = 0
+  // and a tilted wall through x = 1.
+  std::mt19937 rng(5);
+  std::normal_distribution<float> noise(0.0f, 0.002f);
+  const Eigen::Vector3f wall_n = Eigen::Vector3f(-1, 0.2f, 0).normalized();
+  const Eigen::Vector3f wall_u = Eigen::Vector3f(0.2f, 1, 0).normalized();
+  std::vector<Eigen::Vector3f> pts;
+  std::vector<int> kind;  // 0 floor, 1 wall
+  for (float a = -1.0f; a <= 1.4f; a += 0.02f)
+    for (float b = -1.0f; b <= 1.0f; b += 0.02f) {
+      const Eigen::Vector3f p(a, b, noise(rng));
+      if ((p - Eigen::Vector3f(1, 0, 0)).dot(wall_n) < 0.01f) continue;  // the floor ends at the wall
+      pts.push_back(p);
+      kind.push_back(0);
+    }
+  for (float a = -1.0f; a <= 1.0f; a += 0.02f)
+    for (float z = 0.02f; z <= 1.5f; z += 0.02f) {
+      pts.push_back(Eigen::Vector3f(1, 0, 0) + a * wall_u + Eigen::Vector3f(0, 0, z) + noise(rng) * wall_n);
+      kind.push_back(1);
+    }
+  const segmentation::NeighbourGrid grid(pts, 0.03f);
+  const Eigen::Vector3f viewpoint(0, 0, 1);
+  const segmentation::Normals n = segmentation::estimateNormals(pts, grid, 16, viewpoint);
+  int far_checked = 0, wall_checked = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const float to_wall = std::abs((pts[i] - Eigen::Vector3f(1, 0, 0)).dot(wall_n));
+    const bool far = kind[i] == 0 ? to_wall > 0.25f : pts[i].z() > 0.25f;
+    const bool near_edge = kind[i] == 0 ? to_wall < 0.02f : pts[i].z() < 0.03f;
+    ASSERT_GT(n.n[i].norm(), 0.99f) << "point " << i;
+    EXPECT_GT(n.n[i].dot(viewpoint - pts[i]), 0.0f) << "point " << i << " faces away from the viewpoint";
+    // Away from the patches' own borders too.
+    const bool inside = kind[i] == 0 ? std::abs(pts[i].x()) < 0.9f && std::abs(pts[i].y()) < 0.9f
+                                     : std::abs((pts[i] - Eigen::Vector3f(1, 0, 0)).dot(wall_u)) < 0.9f && pts[i].z() < 1.35f;
+    if (far && inside) {
+      const Eigen::Vector3f truth = kind[i] == 0 ? Eigen::Vector3f::UnitZ() : Eigen::Vector3f(wall_n);
+      EXPECT_GT(std::abs(n.n[i].dot(truth)), std::cos(2.0f * static_cast<float>(M_PI) / 180)) << "point " << i;
+      EXPECT_LT(n.curvature[i], 0.005f) << "point " << i;
+      ++far_checked;
+      wall_checked += kind[i];
+    }
+    if (near_edge && std::abs(pts[i].y()) < 0.8f) EXPECT_GT(n.curvature[i], 0.01f) << "edge point " << i;
+  }
+  EXPECT_GT(far_checked, 3000);
+  EXPECT_GT(wall_checked, 2000);
+}
