@@ -19,6 +19,7 @@
 #include "door_state_recognition/recognition/recognition.hpp"
 #include "door_state_recognition/segmentation/segmentation.hpp"
 #include "door_state_recognition/state/door_state.hpp"
+#include "door_state_recognition/state/doors.hpp"
 
 namespace dsr {
 namespace baseline {
@@ -342,57 +343,12 @@ PipelineResult runStockPcl(const Cloud& cloud_in, const Parameters& p, const Sto
   const Eigen::Matrix3d Rt = R.transpose();
   auto toInput = [&](const Eigen::Vector3d& v) -> Eigen::Vector3d { return Rt * v; };
   auto onFloor = [&](const Eigen::Vector2d& xy) { return Eigen::Vector3d(xy.x(), xy.y(), floor_z); };
-  std::vector<char> is_leaf(n, 0), is_wall(n, 0);
-  for (std::size_t wi = 0; wi < walls.size(); ++wi) {
-    const segmentation::WallPlane& wall = walls[wi];
+  state::DoorStage door_stage = state::findDoors(pts, walls, floor_z, top_z, viewpoint, Rt, organized, p);
+  res.doors = std::move(door_stage.doors);
+  const std::vector<char>& is_leaf = door_stage.is_leaf;
+  std::vector<char> is_wall(n, 0);
+  for (const segmentation::WallPlane& wall : walls)
     for (int i : wall.inliers) is_wall[i] = 1;
-    for (const recognition::Doorway& d : recognition::findDoorways(pts, wall, floor_z, top_z, viewpoint, p, organized)) {
-      const double t = d.thickness > 0.04 ? d.thickness : p.default_wall_thickness;
-      const state::LeafFit leaf = state::fitLeaf(pts, wall, d, floor_z, t, viewpoint, p);
-      if (!leaf.found) continue;
-      const bool evidence = leaf.closed_in_band ? (d.casing || d.recess > 0.3 || leaf.coverage > 0.7)
-                                                : (d.casing || d.through >= 0.08);
-      const double height = (std::isfinite(d.top) ? d.top : leaf.top_z) - floor_z;
-      const bool tall = height >= p.door_min_height && height >= p.door_height_ratio * (top_z - floor_z) - p.door_height_phi;
-      const double width = std::abs(leaf.s_latch - leaf.s_hinge);
-      if (!evidence || !tall || width < p.door_min_width || width > p.door_max_width) continue;
-      DoorResult door;
-      door.wall_id = static_cast<int>(wi);
-      door.opening_angle_deg = leaf.angle_deg;
-      door.state = state::classify(leaf.angle_deg, p);
-      door.confidence = std::min(1.0, leaf.coverage) * (d.casing || d.through >= 0.4 ? 1.0 : 0.7);
-      door.swing = leaf.toward_viewer ? Swing::TowardViewer : Swing::AwayFromViewer;
-      const Eigen::Vector2d n2 = leaf.toward_viewer ? wall.normal : Eigen::Vector2d(-wall.normal);
-      door.wall_normal = toInput(Eigen::Vector3d(n2.x(), n2.y(), 0));
-      door.hinge = toInput(onFloor(leaf.hinge));
-      const Eigen::Vector2d center = wall.point + ((leaf.s_hinge + leaf.s_latch) / 2) * wall.direction - (t / 2) * wall.normal;
-      door.opening_center = toInput(onFloor(center));
-      door.width = width;
-      door.height = height;
-      const double bottom = floor_z + 0.01, top = std::max(leaf.top_z, floor_z + 0.5);
-      const Eigen::Vector2d latch = leaf.hinge + leaf.length * leaf.direction;
-      door.leaf_corners = {toInput(Eigen::Vector3d(leaf.hinge.x(), leaf.hinge.y(), bottom)),
-                           toInput(Eigen::Vector3d(latch.x(), latch.y(), bottom)),
-                           toInput(Eigen::Vector3d(latch.x(), latch.y(), top)),
-                           toInput(Eigen::Vector3d(leaf.hinge.x(), leaf.hinge.y(), top))};
-      door.wall_line_point = toInput(onFloor(wall.point));
-      door.wall_line_direction = toInput(Eigen::Vector3d(wall.direction.x(), wall.direction.y(), 0));
-      door.leaf_line_point = door.hinge;
-      door.leaf_line_direction = toInput(Eigen::Vector3d(leaf.direction.x(), leaf.direction.y(), 0));
-      bool duplicate = false;
-      for (DoorResult& other : res.doors)
-        if ((other.opening_center - door.opening_center).norm() < 0.4 ||
-            ((other.hinge - door.hinge).norm() < 0.2 &&
-             std::abs(other.leaf_line_direction.dot(door.leaf_line_direction)) > 0.95)) {
-          duplicate = true;
-          if (door.confidence > other.confidence) other = door;
-        }
-      if (duplicate) continue;
-      for (int i : leaf.inliers) is_leaf[i] = 1;
-      res.doors.push_back(door);
-    }
-  }
-  for (std::size_t i = 0; i < res.doors.size(); ++i) res.doors[i].id = static_cast<int>(i);
   watch.mark("doors");
 
   // --- segments: RegionGrowing, MomentOfInertiaEstimation boxes ---------------

@@ -1,0 +1,34 @@
+// The door stage (recognition + state): doorways on every wall, the leaf in
+// each, and the decision that makes a doorway with its leaf a door. Shared by
+// dsr::Pipeline and the stock-PCL baseline, so that both decide alike.
+// Works in the levelled frame; reports in the input frame. ROS-free.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "door_state_recognition/pipeline/parameters.hpp"
+#include "door_state_recognition/pipeline/pipeline.hpp"
+#include "door_state_recognition/reconstruction/reconstruction.hpp"
+#include "door_state_recognition/segmentation/segmentation.hpp"
+
+namespace dsr {
+namespace state {
+
+struct DoorStage {
+  std::vector<DoorResult> doors;                    // ids 0..n-1, input frame
+  std::vector<char> is_leaf;                        // per point: on a found leaf
+  std::vector<reconstruction::Opening> openings;    // for the reconstruction
+  std::vector<std::string> trace;                   // every doorway and the decision on it
+};
+
+// `to_input` rotates the levelled frame back to the input's. `organized`: a
+// camera frame, where no return in range means free space. Doorways and
+// leaves are searched over the cores; decisions follow in wall order.
+DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentation::WallPlane>& walls, double floor_z,
+                    double top_z, const Eigen::Vector3f& viewpoint, const Eigen::Matrix3d& to_input, bool organized,
+                    const Parameters& p);
+
+}  // namespace state
+}  // namespace dsr

@@ -1,0 +1,160 @@
+#include "door_state_recognition/state/doors.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+
+#include "door_state_recognition/recognition/recognition.hpp"
+#include "door_state_recognition/state/door_state.hpp"
+
+namespace dsr {
+namespace state {
+
+namespace {
+
+// A closed leaf is a door's only evidence when it covers more than this
+// share of its doorway (no trim, see-through or recess).
+constexpr double kClosedBandEvidence = 0.7;
+
+// f(0) ... f(n - 1) over the cores (OpenMP), each at most once; the first
+// exception thrown is rethrown here (none may escape an OpenMP region).
+template <class F>
+void parallelFor(std::size_t n, F f) {
+  std::exception_ptr error;
+#pragma omp parallel for schedule(dynamic, 1)
+  for (long long i = 0; i < static_cast<long long>(n); ++i) {
+    try {
+      f(static_cast<std::size_t>(i));
+    } catch (...) {
+#pragma omp critical(dsr_parallel_for_error)
+      if (!error) error = std::current_exception();
+    }
+  }
+  if (error) std::rethrow_exception(error);
+}
+
+}  // namespace
+
+DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentation::WallPlane>& walls, double floor_z,
+                    double top_z, const Eigen::Vector3f& viewpoint, const Eigen::Matrix3d& to_input, bool organized,
+                    const Parameters& p) {
+  DoorStage out;
+  auto toInput = [&](const Eigen::Vector3d& v) -> Eigen::Vector3d { return to_input * v; };
+  auto onFloor = [&](const Eigen::Vector2d& xy) { return Eigen::Vector3d(xy.x(), xy.y(), floor_z); };
+  out.is_leaf.assign(pts.size(), 0);
+  // The doorways of each wall, then the leaf in each doorway: independent
+  // searches, run over both cores; decisions follow in wall and doorway order.
+  std::vector<std::vector<recognition::Doorway>> doorways(walls.size());
+  parallelFor(walls.size(), [&](std::size_t wi) {
+    doorways[wi] = recognition::findDoorways(pts, walls[wi], floor_z, top_z, viewpoint, p, organized);
+  });
+  struct Candidate {
+    std::size_t wall;
+    recognition::Doorway doorway;
+    LeafFit leaf;
+  };
+  std::vector<Candidate> candidates;
+  for (std::size_t wi = 0; wi < walls.size(); ++wi)
+    for (const recognition::Doorway& d : doorways[wi]) candidates.push_back({wi, d, {}});
+  auto thicknessOf = [&](const recognition::Doorway& d) { return d.thickness > 0.04 ? d.thickness : p.default_wall_thickness; };
+  parallelFor(candidates.size(), [&](std::size_t i) {
+    Candidate& c = candidates[i];
+    // Without trim, see-through or a deep recess only a closed leaf filling
+    // the doorway makes it a door (the evidence rule below): skip the search
+    // when the wall band holds too little for one.
+    const recognition::Doorway& d = c.doorway;
+    const bool other_evidence = d.casing || d.through >= 0.08 || d.recess > 0.3;
+    c.leaf = fitLeaf(pts, walls[c.wall], d, floor_z, thicknessOf(d), viewpoint, p,
+                            other_evidence ? 0.0 : kClosedBandEvidence);
+  });
+  for (const Candidate& cand : candidates) {
+    {
+      const std::size_t wi = cand.wall;
+      const segmentation::WallPlane& wall = walls[wi];
+      const recognition::Doorway& d = cand.doorway;
+      const double t = thicknessOf(d);
+      const LeafFit& leaf = cand.leaf;
+      if (!leaf.found) {
+        char buf[400];
+        std::snprintf(buf, sizeof buf,
+                      "wall %zu: doorway s=[%.2f, %.2f] casing=%d through=%.2f front=%.2f recess=%.2f top=%.2f "
+                      "thick=%.2f | no leaf (%s: %.0f deg, coverage %.2f, contradicted %.2f; %d points, %d rays)",
+                      wi, d.s0, d.s1, d.casing, d.through, d.front, d.recess, d.top - floor_z, d.thickness,
+                      leaf.searched ? "best" : "not searched, no evidence and wall band",
+                      leaf.best_angle_deg, leaf.best_coverage, leaf.best_contradiction, leaf.candidate_points,
+                      leaf.candidate_rays);
+        out.trace.push_back(buf);
+        continue;
+      }
+      // What tells a door from a cupboard or a gap: a closed leaf inside the
+      // wall, or trim around the doorway, or the room beyond seen through it.
+      const bool evidence = leaf.closed_in_band ? (d.casing || d.recess > 0.3 || leaf.coverage > kClosedBandEvidence)
+                                                : (d.casing || d.through >= 0.08);
+      const double height = (std::isfinite(d.top) ? d.top : leaf.top_z) - floor_z;
+      const double wall_h = top_z - floor_z;
+      const bool tall = height >= p.door_min_height && height >= p.door_height_ratio * wall_h - p.door_height_phi;
+      const double width = std::abs(leaf.s_latch - leaf.s_hinge);
+      const bool wide = width >= p.door_min_width && width <= p.door_max_width;
+      {
+        char buf[400];
+        std::snprintf(buf, sizeof buf,
+                      "wall %zu: doorway s=[%.2f, %.2f] casing=%d face=%.2f through=%.2f front=%.2f recess=%.2f "
+                      "top=%.2f thick=%.2f | leaf found=%d band=%d angle=%.1f cov=%.2f hinge_s0=%d toward=%d | %s",
+                      wi, d.s0, d.s1, d.casing, d.face, d.through, d.front, d.recess, d.top - floor_z, d.thickness,
+                      leaf.found, leaf.closed_in_band, leaf.angle_deg, leaf.coverage, leaf.hinge_at_s0,
+                      leaf.toward_viewer,
+                      !evidence ? "rejected: no casing, recess or see-through"
+                                : !tall ? "rejected: too low" : !wide ? "rejected: width" : "door");
+        out.trace.push_back(buf);
+      }
+      if (!evidence || !tall || !wide) continue;
+
+      DoorResult door;
+      door.wall_id = static_cast<int>(wi);
+      door.opening_angle_deg = leaf.angle_deg;
+      door.state = classify(leaf.angle_deg, p);
+      // Confidence: how much of the leaf was seen, and how sure the doorway is.
+      door.confidence = std::min(1.0, leaf.coverage) * (d.casing || d.through >= 0.4 ? 1.0 : 0.7);
+      door.swing = leaf.toward_viewer ? Swing::TowardViewer : Swing::AwayFromViewer;
+      const Eigen::Vector2d n2 = leaf.toward_viewer ? wall.normal : Eigen::Vector2d(-wall.normal);
+      door.wall_normal = toInput(Eigen::Vector3d(n2.x(), n2.y(), 0));
+      door.hinge = toInput(onFloor(leaf.hinge));
+      const Eigen::Vector2d center = wall.point + ((leaf.s_hinge + leaf.s_latch) / 2) * wall.direction - (t / 2) * wall.normal;
+      door.opening_center = toInput(onFloor(center));
+      door.width = std::abs(leaf.s_latch - leaf.s_hinge);
+      door.height = height;
+      const double bottom = floor_z + 0.01, top = std::max(leaf.top_z, floor_z + 0.5);
+      const Eigen::Vector2d latch = leaf.hinge + leaf.length * leaf.direction;
+      door.leaf_corners = {toInput(Eigen::Vector3d(leaf.hinge.x(), leaf.hinge.y(), bottom)),
+                           toInput(Eigen::Vector3d(latch.x(), latch.y(), bottom)),
+                           toInput(Eigen::Vector3d(latch.x(), latch.y(), top)),
+                           toInput(Eigen::Vector3d(leaf.hinge.x(), leaf.hinge.y(), top))};
+      door.wall_line_point = toInput(onFloor(wall.point));
+      door.wall_line_direction = toInput(Eigen::Vector3d(wall.direction.x(), wall.direction.y(), 0));
+      door.leaf_line_point = door.hinge;
+      door.leaf_line_direction = toInput(Eigen::Vector3d(leaf.direction.x(), leaf.direction.y(), 0));
+      // The same doorway found from two overlapping wall hypotheses, or the
+      // same leaf claimed by two doorways (a leaf's shadow beside its own
+      // doorway looks like one): keep the surer one.
+      bool duplicate = false;
+      for (DoorResult& other : out.doors)
+        if ((other.opening_center - door.opening_center).norm() < 0.4 ||
+            ((other.hinge - door.hinge).norm() < 0.2 &&
+             std::abs(other.leaf_line_direction.dot(door.leaf_line_direction)) > 0.95)) {
+          duplicate = true;
+          if (door.confidence > other.confidence) other = door;
+        }
+      if (duplicate) continue;
+      for (int i : leaf.inliers) out.is_leaf[i] = 1;
+      out.doors.push_back(door);
+      out.openings.push_back({static_cast<int>(wi), std::min(leaf.s_hinge, leaf.s_latch), std::max(leaf.s_hinge, leaf.s_latch), floor_z + height, leaf.hinge, leaf.direction, leaf.length,
+                          bottom, top});
+    }
+  }
+  for (std::size_t i = 0; i < out.doors.size(); ++i) out.doors[i].id = static_cast<int>(i);
+  return out;
+}
+
+}  // namespace state
+}  // namespace dsr
