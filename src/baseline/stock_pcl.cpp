@@ -246,7 +246,6 @@ PipelineResult runStockPcl(const Cloud& cloud_in, const Parameters& p, const Sto
         pool->push_back((*cloud)[i]);
         orig.push_back(static_cast<int>(i));
       }
-    const double room_h = top_z - floor_z;
     const Eigen::Vector2d vp2 = viewpoint.head<2>().cast<double>();
     pcl::SACSegmentation<pcl::PointXYZ> seg;
     seg.setOptimizeCoefficients(true);
@@ -296,45 +295,9 @@ PipelineResult runStockPcl(const Cloud& cloud_in, const Parameters& p, const Sto
       const Eigen::Vector2d point = c - (nrm.dot(c) + d) * nrm;
       if ((vp2 - point).dot(nrm) < 0) nrm = -nrm;
       const Eigen::Vector2d dir(nrm.y(), -nrm.x());
-      std::vector<std::pair<double, int>> along;
-      along.reserve(members.size());
-      for (int i : members) along.push_back({(pts[i].head<2>().cast<double>() - point).dot(dir), i});
-      std::sort(along.begin(), along.end());
-      std::size_t start = 0;
-      for (std::size_t k = 1; k <= along.size(); ++k) {
-        if (k < along.size() && along[k].first - along[k - 1].first <= p.wall_gap) continue;
-        segmentation::WallPlane w;
-        w.point = point;
-        w.direction = dir;
-        w.normal = nrm;
-        w.s_min = along[start].first;
-        w.s_max = along[k - 1].first;
-        w.z_min = 1e9;
-        w.z_max = -1e9;
-        for (std::size_t j = start; j < k; ++j) {
-          w.inliers.push_back(along[j].second);
-          w.z_min = std::min<double>(w.z_min, pts[along[j].second].z());
-          w.z_max = std::max<double>(w.z_max, pts[along[j].second].z());
-        }
-        start = k;
-        // The paper's height rule, and the rules of ours that a user would
-        // add once the paper's rule took cupboard fronts and leaves for walls.
-        const bool tall = w.z_max - floor_z >= p.wall_height_ratio * room_h && w.z_min < floor_z + 0.5;
-        const bool reaches_top = !res.ceiling || w.z_max > top_z - 0.25;
-        bool shadowed = false;
-        for (const auto& other : walls) {
-          if (std::abs(other.normal.dot(w.normal)) < 0.995) continue;
-          const Eigen::Vector2d a = w.point + w.s_min * w.direction, b = w.point + w.s_max * w.direction;
-          const double off = std::abs((0.5 * (a + b) - other.point).dot(other.normal));
-          const double s0 = std::min((a - other.point).dot(other.direction), (b - other.point).dot(other.direction));
-          const double s1 = std::max((a - other.point).dot(other.direction), (b - other.point).dot(other.direction));
-          shadowed |= off < 0.3 && s0 < other.s_max && s1 > other.s_min;
-        }
-        const double min_length = res.ceiling ? p.min_wall_length : std::max(p.min_wall_length, p.door_max_width + 0.1);
-        if (static_cast<int>(w.inliers.size()) >= p.min_wall_points && w.s_max - w.s_min >= min_length && tall &&
-            reaches_top && !shadowed)
-          walls.push_back(std::move(w));
-      }
+      // The paper's height rule, and the rules of ours that a user would add
+      // once the paper's rule took cupboard fronts and leaves for walls.
+      segmentation::addWallSegments(pts, members, point, dir, nrm, floor_z, top_z, res.ceiling.has_value(), p, walls);
     }
   }
   watch.mark("walls");

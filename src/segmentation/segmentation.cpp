@@ -175,6 +175,54 @@ void fitLine(const std::vector<Eigen::Vector2d>& pts, Eigen::Vector2d& c, Eigen:
 
 }  // namespace
 
+void addWallSegments(const Points& points, const std::vector<int>& inliers, const Eigen::Vector2d& point,
+                     const Eigen::Vector2d& direction, const Eigen::Vector2d& normal, double floor_z, double height_top,
+                     bool ceiling_known, const Parameters& p, std::vector<WallPlane>& walls) {
+  const double room_h = height_top - floor_z;
+  // Split along the wall at gaps wider than wall_gap.
+  std::vector<std::pair<double, int>> along;
+  for (int i : inliers) along.push_back({(Eigen::Vector2d(points[i].x(), points[i].y()) - point).dot(direction), i});
+  std::sort(along.begin(), along.end());
+  std::size_t start = 0;
+  for (std::size_t k = 1; k <= along.size(); ++k) {
+    if (k < along.size() && along[k].first - along[k - 1].first <= p.wall_gap) continue;
+    WallPlane w;
+    w.point = point;
+    w.direction = direction;
+    w.normal = normal;
+    w.s_min = along[start].first;
+    w.s_max = along[k - 1].first;
+    w.z_min = 1e9;
+    w.z_max = -1e9;
+    for (std::size_t j = start; j < k; ++j) {
+      w.inliers.push_back(along[j].second);
+      w.z_min = std::min<double>(w.z_min, points[along[j].second].z());
+      w.z_max = std::max<double>(w.z_max, points[along[j].second].z());
+    }
+    start = k;
+    const double h = w.z_max - floor_z;
+    const bool tall = h >= p.wall_height_ratio * room_h && w.z_min < floor_z + 0.5;
+    const bool reaches_top = !ceiling_known || w.z_max > height_top - 0.25;
+    // A plane parallel to a stronger wall and close behind or before it
+    // (a recessed leaf, trim, a cupboard front) is not another wall.
+    bool shadowed = false;
+    for (const WallPlane& o : walls) {
+      if (std::abs(o.normal.dot(w.normal)) < 0.995) continue;
+      const Eigen::Vector2d a = w.point + w.s_min * w.direction, b = w.point + w.s_max * w.direction;
+      const double off = std::abs((0.5 * (a + b) - o.point).dot(o.normal));
+      const double s0 = std::min((a - o.point).dot(o.direction), (b - o.point).dot(o.direction));
+      const double s1 = std::max((a - o.point).dot(o.direction), (b - o.point).dot(o.direction));
+      shadowed |= off < 0.3 && s0 < o.s_max && s1 > o.s_min;
+    }
+    // Without a ceiling to reach, a door leaf is as tall as a wall: then a
+    // wall must also be longer than any door.
+    const double min_length = ceiling_known ? p.min_wall_length : std::max(p.min_wall_length, p.door_max_width + 0.1);
+    if (static_cast<int>(w.inliers.size()) >= p.min_wall_points && w.s_max - w.s_min >= min_length && tall &&
+        reaches_top && !shadowed)
+      walls.push_back(std::move(w));
+  }
+}
+
 std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, double floor_z, double height_top,
                                  bool ceiling_known, const Eigen::Vector2d& viewpoint, const Parameters& p) {
   std::vector<int> pool;
@@ -182,7 +230,6 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
     if (std::abs(normals.n[i].z()) < p.vertical_normal_z && points[i].z() > floor_z + 0.05) pool.push_back(static_cast<int>(i));
   std::vector<WallPlane> walls;
   std::mt19937 rng(static_cast<unsigned>(p.random_seed));
-  const double room_h = height_top - floor_z;
   for (int round = 0; round < 4 * p.max_walls && static_cast<int>(walls.size()) < p.max_walls; ++round) {
     if (static_cast<int>(pool.size()) < p.min_wall_points) break;
     // 1-point RANSAC: a point with its (horizontal) normal proposes a plane.
@@ -245,48 +292,7 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
     }
     const Eigen::Vector2d dir(best_n.y(), -best_n.x());
     if ((viewpoint - best_pt).dot(best_n) < 0) best_n = -best_n;
-    // Split along the wall at gaps wider than wall_gap.
-    std::vector<std::pair<double, int>> along;
-    for (int i : inl) along.push_back({(Eigen::Vector2d(points[i].x(), points[i].y()) - best_pt).dot(dir), i});
-    std::sort(along.begin(), along.end());
-    std::size_t start = 0;
-    for (std::size_t k = 1; k <= along.size(); ++k) {
-      if (k < along.size() && along[k].first - along[k - 1].first <= p.wall_gap) continue;
-      WallPlane w;
-      w.point = best_pt;
-      w.direction = dir;
-      w.normal = best_n;
-      w.s_min = along[start].first;
-      w.s_max = along[k - 1].first;
-      w.z_min = 1e9;
-      w.z_max = -1e9;
-      for (std::size_t j = start; j < k; ++j) {
-        w.inliers.push_back(along[j].second);
-        w.z_min = std::min<double>(w.z_min, points[along[j].second].z());
-        w.z_max = std::max<double>(w.z_max, points[along[j].second].z());
-      }
-      start = k;
-      const double h = w.z_max - floor_z;
-      const bool tall = h >= p.wall_height_ratio * room_h && w.z_min < floor_z + 0.5;
-      const bool reaches_top = !ceiling_known || w.z_max > height_top - 0.25;
-      // A plane parallel to a stronger wall and close behind or before it
-      // (a recessed leaf, trim, a cupboard front) is not another wall.
-      bool shadowed = false;
-      for (const WallPlane& o : walls) {
-        if (std::abs(o.normal.dot(w.normal)) < 0.995) continue;
-        const Eigen::Vector2d a = w.point + w.s_min * w.direction, b = w.point + w.s_max * w.direction;
-        const double off = std::abs((0.5 * (a + b) - o.point).dot(o.normal));
-        const double s0 = std::min((a - o.point).dot(o.direction), (b - o.point).dot(o.direction));
-        const double s1 = std::max((a - o.point).dot(o.direction), (b - o.point).dot(o.direction));
-        shadowed |= off < 0.3 && s0 < o.s_max && s1 > o.s_min;
-      }
-      // Without a ceiling to reach, a door leaf is as tall as a wall: then a
-      // wall must also be longer than any door.
-      const double min_length = ceiling_known ? p.min_wall_length : std::max(p.min_wall_length, p.door_max_width + 0.1);
-      if (static_cast<int>(w.inliers.size()) >= p.min_wall_points && w.s_max - w.s_min >= min_length && tall &&
-          reaches_top && !shadowed)
-        walls.push_back(std::move(w));
-    }
+    addWallSegments(points, inl, best_pt, dir, best_n, floor_z, height_top, ceiling_known, p, walls);
   }
   return walls;
 }

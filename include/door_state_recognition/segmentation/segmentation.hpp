@@ -61,6 +61,15 @@ struct WallPlane {
 std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, double floor_z, double height_top,
                                  bool ceiling_known, const Eigen::Vector2d& viewpoint, const Parameters& p);
 
+// The wall rules of findWalls for one plane's inliers: split along the wall
+// at gaps wider than wall_gap, and append to `walls` each segment that spans
+// wall_height_ratio of the room, reaches near a known ceiling, is long
+// enough and is not shadowed by a parallel wall found before. `direction`
+// and `normal` (unit, horizontal) give the segment's frame.
+void addWallSegments(const Points& points, const std::vector<int>& inliers, const Eigen::Vector2d& point,
+                     const Eigen::Vector2d& direction, const Eigen::Vector2d& normal, double floor_z, double height_top,
+                     bool ceiling_known, const Parameters& p, std::vector<WallPlane>& walls);
+
 // Region growing (paper 3.1, [22]) over the points where mask != 0: a region
 // grows to neighbours whose normals differ by less than region_angle_deg and
 // continues from points whose curvature is below region_curvature. Regions
