@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "door_state_recognition/eval/evaluation.hpp"
+#include "door_state_recognition/io/cloud_reader.hpp"
 #include "door_state_recognition/io/report.hpp"
 #include "door_state_recognition/pipeline/pipeline.hpp"
 #include "door_state_recognition/preprocess/preprocess.hpp"
@@ -341,6 +342,27 @@ TEST(BadInput, TooLargeACloudIsRefused) {
   pcl::PointCloud<pcl::PointXYZ> c;
   for (int i = 0; i < 101; ++i) c.push_back({0, 0, static_cast<float>(i)});
   EXPECT_THROW(Pipeline(p).run(c), std::invalid_argument);
+}
+
+// Regression, found by fuzz_pipeline (crash c9a13705, a mutated camera frame):
+// a ray running nearly parallel to a wall crossed the wall's plane ~1e13 m away
+// and the occluder-shadow cell index overflowed int in findDoorways (undefined
+// behaviour; UBSan in make sanitize stops on it). The frame must go through.
+TEST(BadInput, RayParallelToAWallDoesNotOverflowTheShadowGrid) {
+  const pcl::PointCloud<pcl::PointXYZ> cloud =
+      dsr::io::readCloud(DSR_CONFIG_DIR "/../test/data/fuzz_pipeline_crash_c9a13705.pcd");
+  ASSERT_EQ(cloud.width, 64u);
+  ASSERT_EQ(cloud.height, 48u);
+  Parameters p;
+  p.up_axis = "-y";
+  PipelineResult r;
+  ASSERT_NO_THROW(r = Pipeline(p).run(cloud, true));
+  EXPECT_EQ(r.points_in, 3072u);
+  EXPECT_FALSE(r.walls.empty());  // findDoorways ran on a wall
+  for (const auto& d : r.doors) {
+    EXPECT_GE(d.opening_angle_deg, 0.0);
+    EXPECT_LE(d.opening_angle_deg, 180.0);
+  }
 }
 
 TEST(Parameters, DefaultYamlMatchesTheCode) {

@@ -194,10 +194,15 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     } else {
       // An occluder shadows a patch that grows with lambda: a rectangle of
       // cells, added to a difference array (summed once below).
-      const int r = std::min(5, static_cast<int>(std::ceil(0.5 * footprint * lambda / cell)));
-      const int c = static_cast<int>(std::floor((s - s_lo) / cell));
-      const int r0 = static_cast<int>(std::floor((x.z() - r * cell - floor_z) / row_h));
-      const int r1 = static_cast<int>(std::floor((x.z() + r * cell - floor_z) / row_h));
+      // lambda grows without bound as the ray runs parallel to the wall, so the
+      // crossing may lie far off the grid: clamp and test in double before any
+      // cast to int (found by fuzz_pipeline; off-grid patches were skipped anyway).
+      const int r = static_cast<int>(std::min(5.0, std::ceil(0.5 * footprint * lambda / cell)));
+      const double cf = std::floor((s - s_lo) / cell);
+      const double r0f = std::floor((x.z() - r * cell - floor_z) / row_h);
+      const double r1f = std::floor((x.z() + r * cell - floor_z) / row_h);
+      if (!(cf >= -r && cf <= cols - 1 + r && r1f >= 0 && r0f <= rows - 1)) continue;  // also NaN
+      const int c = static_cast<int>(cf), r0 = static_cast<int>(r0f), r1 = static_cast<int>(r1f);
       const int ca = std::max(0, c - r), cb = std::min(cols - 1, c + r), ra = std::max(0, r0), rb = std::min(rows - 1, r1);
       if (ca > cb || ra > rb) continue;
       front_diff[static_cast<std::size_t>(ra) * (cols + 1) + ca] += 1;
