@@ -35,21 +35,23 @@ for t in "${TARGETS[@]}"; do
   mkdir -p "$work" "$art"
   log="$OUT/$t.log"
   echo "fuzz: $t for ${SECONDS_EACH} s (log $log)"
+  t0=$(date +%s)
   set +e
   "$OUT/$t" -max_total_time="$SECONDS_EACH" -max_len="${MAX_LEN[$t]}" -timeout="${TIMEOUT[$t]}" \
     -rss_limit_mb=2048 -malloc_limit_mb=1024 -print_final_stats=1 -artifact_prefix="$art" \
     "$work" "$HERE/corpus/$t" >"$log" 2>&1
   rc=$?
   set -e
-  runs=$(grep -oE 'stat::number_of_executed_units: *[0-9]+' "$log" | grep -oE '[0-9]+$' | tail -n 1)
-  secs=$(grep -oE 'Done [0-9]+ runs in [0-9]+ second' "$log" | grep -oE 'in [0-9]+' | grep -oE '[0-9]+' | tail -n 1)
-  [ -n "$secs" ] || secs="?"
+  # (|| true: a crashed run prints no "Done" line, and pipefail must not end the script)
+  runs=$(grep -oE 'stat::number_of_executed_units: *[0-9]+' "$log" | grep -oE '[0-9]+$' | tail -n 1 || true)
+  secs=$(grep -oE 'Done [0-9]+ runs in [0-9]+ second' "$log" | grep -oE 'in [0-9]+' | grep -oE '[0-9]+' | tail -n 1 || true)
+  [ -n "$secs" ] || secs="$(( $(date +%s) - t0 )) (crashed)"
   cov=$(grep -oE '^#[0-9]+.*cov: [0-9]+' "$log" | tail -n 1 | grep -oE 'cov: [0-9]+' || true)
   if [ $rc -eq 0 ]; then
     result="clean"
   else
     status=1
-    result="FAILED (exit $rc): $(grep -m1 -oE 'ERROR: [A-Za-z]+: .*|runtime error: .*|deadly signal|Test unit written to .*' "$log" | head -n 1)"
+    result="FAILED (exit $rc): $(grep -m1 -oE 'ERROR: [A-Za-z]+: .*|runtime error: .*|deadly signal|Test unit written to .*' "$log" | head -n 1 || true)"
     grep -E 'Test unit written to' "$log" | tail -n 1 || true
   fi
   line="$t: ${runs:-?} runs in ${secs} s, ${cov:-cov: ?}, corpus $(ls "$work" | wc -l) + $(ls "$HERE/corpus/$t" | wc -l) seeds: $result"

@@ -27,12 +27,23 @@ export LSAN_OPTIONS="suppressions=$HERE/lsan.supp:print_suppressions=0"
 export OMP_NUM_THREADS="${OMP_NUM_THREADS:-2}"
 
 failed=()
-for t in test_cloud_reader test_cloud_conversion test_evaluation test_simulator test_pipeline; do
+# The canary must be caught by both sanitizers, else the flags are not in effect.
+if "$OUT/canary" asan >"$OUT/canary.log" 2>&1 || ! grep -q "heap-buffer-overflow" "$OUT/canary.log"; then
+  echo "sanitize: ASan did not catch the canary's overflow"; failed+=(canary-asan)
+fi
+if "$OUT/canary" ubsan >"$OUT/canary.log" 2>&1 || ! grep -q "runtime error: signed integer overflow" "$OUT/canary.log"; then
+  echo "sanitize: UBSan did not catch the canary's overflow"; failed+=(canary-ubsan)
+fi
+if "$OUT/canary" floatcast >"$OUT/canary.log" 2>&1 || ! grep -q "runtime error: .* is outside the range of representable values" "$OUT/canary.log"; then
+  echo "sanitize: UBSan did not catch the canary's float-to-int overflow"; failed+=(canary-floatcast)
+fi
+for t in test_cloud_reader test_cloud_conversion test_evaluation test_neighbours test_simulator test_pipeline; do
   exe="$OUT/$t"
   [ -x "$exe" ] || { echo "sanitize: $t was not built"; failed+=("$t"); continue; }
   t0=$(date +%s)
   if "$exe" --gtest_brief=1 >"$OUT/$t.log" 2>&1; then
-    echo "sanitize: $t passed ($(grep -E '^\[==========\] .* ran' "$OUT/$t.log" | sed 's/.*ran\. //'), $(( $(date +%s) - t0 )) s wall)"
+    tests=$(grep -oE '^\[==========\] [0-9]+ tests' "$OUT/$t.log" | grep -oE '[0-9]+' | tail -n 1)
+    echo "sanitize: $t passed (${tests:-?} tests, $(( $(date +%s) - t0 )) s)"
   else
     echo "sanitize: $t FAILED, last lines of $OUT/$t.log:"
     grep -E "ERROR: |runtime error|SUMMARY|FAILED|Failure" "$OUT/$t.log" | head -n 20 || tail -n 30 "$OUT/$t.log"
@@ -41,4 +52,4 @@ for t in test_cloud_reader test_cloud_conversion test_evaluation test_simulator 
 done
 echo "sanitize: build $((built - start)) s, tests $(( $(date +%s) - built )) s"
 if [ ${#failed[@]} -gt 0 ]; then echo "sanitize: FAILED: ${failed[*]}"; exit 1; fi
-echo "sanitize: all clean"
+echo "sanitize: all clean (canary caught by ASan and UBSan)"
