@@ -3,7 +3,7 @@
 # PointCloud2 published (stamped at publish time) to the DoorStateArray that
 # answers it, for simulated clouds played at a fixed rate from a rosbag.
 #
-#   scripts/nodelet_latency.sh [CASE ...]     (default: rgbd30 tls30 rgbd2 tls05)
+#   scripts/nodelet_latency.sh [CASE ...]     (default: rgbd30 tls30 rgbd2 tls05 unload)
 #
 # Cases (clouds from door_scene_sim, seed 7, bags cached in $DSR_BUILD/latency):
 #   rgbd30  one 640x480 RGB-D frame at 30 Hz (a camera's rate: overload)
@@ -12,6 +12,8 @@
 #   tls05   the laser scan at 0.5 Hz (no overload)
 #   soak    both bags in turn at 10 Hz through tf (~fixed_frame map), for
 #           SOAK_SECONDS (default 600): scripts/soak.sh
+#   unload  the nodelet unloaded from its manager while clouds stream in at
+#           30 Hz: the manager must survive (the destructor's clean shutdown)
 #
 # Each case starts its own nodelet manager with the nodelet loaded into it
 # (config/default.yaml, up axis of the cloud), under a roscore of its own on
@@ -31,7 +33,7 @@ export ROS_LOG_DIR="$OUT/log"
 PORT="${LATENCY_ROS_PORT:-$((20000 + RANDOM % 20000))}"
 export ROS_MASTER_URI="http://localhost:$PORT"
 CASES=("$@")
-[ ${#CASES[@]} -gt 0 ] || CASES=(rgbd30 tls30 rgbd2 tls05)
+[ ${#CASES[@]} -gt 0 ] || CASES=(rgbd30 tls30 rgbd2 tls05 unload)
 
 for exe in door_scene_sim door_state_latency; do
   [ -x "$BIN/$exe" ] || { echo "nodelet_latency: $BIN/$exe missing: run make build first" >&2; exit 2; }
@@ -83,7 +85,48 @@ run() {  # run LABEL RATE SECONDS UP_AXIS FIXED_FRAME BAG...
     echo "nodelet_latency: the nodelet manager died during case $label (log: $OUT/$label.manager.log)" >&2
     FAILED=1
   fi
+  # Unloading runs the nodelet's destructor in the manager, under load
+  # (the worker may be in the middle of a cloud): the manager must survive it.
+  local before=no
+  for _ in $(seq 10); do publishes_doors && { before=yes; break; }; sleep 0.5; done
   stop "$LOADER"; LOADER=""
+  for _ in $(seq 15); do publishes_doors || break; sleep 1; done
+  if [ "$before" = yes ] && kill -0 "$MGR" 2>/dev/null && ! publishes_doors; then
+    echo "  nodelet unloaded, manager still running: yes"
+  else
+    echo "nodelet_latency: unloading the nodelet failed or killed the manager (log: $OUT/$label.manager.log)" >&2
+    FAILED=1
+  fi
+  stop "$MGR"; MGR=""
+}
+
+# Whether the nodelet (in dsr_manager) still advertises /doors.
+publishes_doors() { rostopic info /doors 2>/dev/null | grep -q "/dsr_manager "; }
+
+unload_under_load() {  # the nodelet unloaded while clouds stream in at 30 Hz and one is processed
+  rosparam delete /door_state >/dev/null 2>&1 || true
+  rosparam load "$REPO/config/default.yaml" /door_state
+  /usr/lib/nodelet/nodelet manager __name:=dsr_manager >"$OUT/unload.manager.log" 2>&1 &
+  MGR=$!
+  /usr/lib/nodelet/nodelet load door_state_recognition/DoorStateNodelet dsr_manager __name:=door_state \
+    >"$OUT/unload.nodelet.log" 2>&1 &
+  LOADER=$!
+  "$BIN/door_state_latency" --bag "$OUT/tls400k.bag" --rate 30 --seconds 12 --drain 2 --label unload \
+    >"$OUT/unload.tool.log" 2>&1 &
+  local tool=$!
+  sleep 8
+  local before=no
+  for _ in $(seq 10); do publishes_doors && { before=yes; break; }; sleep 0.5; done
+  stop "$LOADER"; LOADER=""
+  for _ in $(seq 15); do publishes_doors || break; sleep 1; done
+  if [ "$before" = yes ] && kill -0 "$MGR" 2>/dev/null && ! publishes_doors; then
+    echo "unload: nodelet unloaded while clouds streamed in at 30 Hz, manager still running: yes"
+  else
+    echo "nodelet_latency: unloading under load failed or killed the manager (advertised before: $before; log: $OUT/unload.manager.log)" >&2
+    rostopic info /doors >&2 || true
+    FAILED=1
+  fi
+  wait "$tool" 2>/dev/null || true
   stop "$MGR"; MGR=""
 }
 
@@ -95,7 +138,8 @@ for c in "${CASES[@]}"; do
     rgbd2)  run rgbd2 2 "$SECS" -y "" "$OUT/rgbd.bag" ;;
     tls05)  run tls05 0.5 "$SECS" +z "" "$OUT/tls400k.bag" ;;
     soak)   run "soak" 10 "${SOAK_SECONDS:-600}" +z map "$OUT/tls400k.bag" "$OUT/rgbd.bag" ;;
-    *) echo "nodelet_latency: unknown case '$c' (rgbd30 tls30 rgbd2 tls05 soak)" >&2; exit 2 ;;
+    unload) unload_under_load ;;
+    *) echo "nodelet_latency: unknown case '$c' (rgbd30 tls30 rgbd2 tls05 soak unload)" >&2; exit 2 ;;
   esac
 done
 exit "$FAILED"
