@@ -23,12 +23,12 @@ struct Normals {
   std::vector<float> curvature;  // lambda0 / (lambda0 + lambda1 + lambda2)
 };
 
-// PCA normals and curvature from cell moments: every point of a grid cell
-// gets the PCA of the points in the 3 x 3 x 3 cells around it, or in the
-// 5 x 5 x 5 cells where fewer than min(k, 8) points lie in those (sparse
-// surroundings far from the sensor). `grid` must be built on `points` (or a
-// rotated copy); a cell of half the wanted neighbourhood radius gives a
-// neighbourhood about that wide. Normals point towards `viewpoint` (same
+// PCA normals and curvature from cell moments. A coarse level of cells twice
+// the grid's gives every coarse cell the PCA of its 3 x 3 x 3 coarse block;
+// where that is planar (curvature <= 0.02) its points take it, elsewhere
+// (edges, corners, thin parts) the PCA of the 3 x 3 x 3 grid cells around,
+// when those hold at least min(k, 8) points. `grid` must be built on
+// `points` (or a rotated copy). Normals point towards `viewpoint` (same
 // frame as `points`). An isolated point gets a zero normal and curvature 1.
 Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, const Eigen::Vector3f& viewpoint);
 
