@@ -1,4 +1,5 @@
 #include "door_state_recognition/baseline/stock_pcl.hpp"
+#include "door_state_recognition/pipeline/stopwatch.hpp"
 
 #include <pcl/common/transforms.h>
 #include <pcl/features/boundary.h>
@@ -14,8 +15,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 
+#include "door_state_recognition/preprocess/preprocess.hpp"
 #include "door_state_recognition/recognition/recognition.hpp"
 #include "door_state_recognition/segmentation/segmentation.hpp"
 #include "door_state_recognition/state/door_state.hpp"
@@ -26,28 +29,6 @@ namespace baseline {
 namespace {
 
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
-using Clock = std::chrono::steady_clock;
-
-struct Stopwatch {
-  Clock::time_point start = Clock::now(), lap = start;
-  std::vector<std::pair<std::string, double>>* out;
-  explicit Stopwatch(std::vector<std::pair<std::string, double>>* o) : out(o) {}
-  void mark(const std::string& stage) {
-    const auto now = Clock::now();
-    out->push_back({stage, std::chrono::duration<double, std::milli>(now - lap).count()});
-    lap = now;
-  }
-  void total() { out->push_back({"total", std::chrono::duration<double, std::milli>(Clock::now() - start).count()}); }
-};
-
-Eigen::Vector3d axisOf(const std::string& a) {
-  if (a.size() == 2 && (a[0] == '+' || a[0] == '-') && a[1] >= 'x' && a[1] <= 'z') {
-    Eigen::Vector3d v = Eigen::Vector3d::Zero();
-    v[a[1] - 'x'] = a[0] == '+' ? 1.0 : -1.0;
-    return v;
-  }
-  throw std::invalid_argument("stock-PCL baseline: up_axis must be one of +x -x +y -y +z -z, not '" + a + "'");
-}
 
 Cloud::Ptr voxelGrid(const Cloud::ConstPtr& in, double leaf) {
   Cloud::Ptr out(new Cloud);
@@ -117,7 +98,9 @@ PipelineResult runStockPcl(const Cloud& cloud_in, const Parameters& p, const Sto
   Stopwatch watch(&res.timing_ms);
   res.points_in = cloud_in.size();
   const bool organized = cloud_in.height > 1;
-  const Eigen::Vector3d given_up = axisOf(p.up_axis);
+  const std::optional<Eigen::Vector3d> axis = preprocess::parseUpAxis(p.up_axis);
+  if (!axis) throw std::invalid_argument("stock-PCL baseline: up_axis must be one of +x -x +y -y +z -z, not 'auto'");
+  const Eigen::Vector3d given_up = *axis;
 
   // --- preprocess: drop garbage, level to the given axis refined by the
   // largest horizontal plane (SAC), voxel grid ---------------------------------

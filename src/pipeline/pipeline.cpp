@@ -1,4 +1,5 @@
 #include "door_state_recognition/pipeline/pipeline.hpp"
+#include "door_state_recognition/pipeline/stopwatch.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -34,24 +35,6 @@ const char* toString(Swing s) {
 }
 
 Pipeline::Pipeline(const Parameters& parameters) : params_(parameters) { params_.validate(); }
-
-namespace {
-
-using Clock = std::chrono::steady_clock;
-
-struct Stopwatch {
-  Clock::time_point start = Clock::now(), lap = start;
-  std::vector<std::pair<std::string, double>>* out;
-  explicit Stopwatch(std::vector<std::pair<std::string, double>>* o) : out(o) {}
-  void mark(const std::string& stage) {
-    const auto now = Clock::now();
-    out->push_back({stage, std::chrono::duration<double, std::milli>(now - lap).count()});
-    lap = now;
-  }
-  void total() { out->push_back({"total", std::chrono::duration<double, std::milli>(Clock::now() - start).count()}); }
-};
-
-}  // namespace
 
 PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool with_reconstruction,
                              const Eigen::Vector3d& viewpoint_in) const {
