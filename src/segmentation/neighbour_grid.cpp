@@ -53,13 +53,6 @@ void NeighbourGrid::neighbourCells(std::size_t c, int ring, std::vector<std::uin
       }
 }
 
-void NeighbourGrid::candidates(std::size_t c, int ring, std::vector<int>& idx) const {
-  thread_local std::vector<std::uint32_t> cells;
-  neighbourCells(c, ring, cells);
-  idx.clear();
-  for (std::uint32_t o : cells) idx.insert(idx.end(), order_.begin() + begin_[o], order_.begin() + begin_[o + 1]);
-}
-
 void NeighbourGrid::within(int i, float r, std::vector<int>& idx, std::vector<float>& d2) const {
   idx.clear();
   d2.clear();

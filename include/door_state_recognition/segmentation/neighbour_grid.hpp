@@ -3,9 +3,10 @@
 // 125 for a radius up to twice the cell). Built in O(n) with a flat hash, it
 // replaces a k-d tree: after voxel thinning every neighbourhood the pipeline
 // asks for is a few centimetres wide, which a grid answers without a tree
-// walk. Stores indices and its own cell-ordered copy of the points (for
-// locality); distances are rotation-invariant, so a grid built before
-// levelling serves the levelled points as well. ROS-free.
+// walk. Normals and region growing work on whole cells (neighbourCells).
+// Stores indices and its own cell-ordered copy of the points (for locality);
+// distances are rotation-invariant, so a grid built before levelling serves
+// the levelled points as well. ROS-free.
 #pragma once
 
 #include <Eigen/Core>
@@ -36,9 +37,6 @@ class NeighbourGrid {
   // Every point within distance r of point i (itself excluded), r <= 2 cell:
   // index and squared distance appended to idx and d2 (cleared first).
   void within(int i, float r, std::vector<int>& idx, std::vector<float>& d2) const;
-  // Candidates of a whole cell: every point of the 3 x 3 x 3 cells around c
-  // (ring 1) or 5 x 5 x 5 (ring 2), appended to idx (cleared first).
-  void candidates(std::size_t c, int ring, std::vector<int>& idx) const;
   // The occupied cells of the (2 ring + 1)^3 block around c, c included.
   void neighbourCells(std::size_t c, int ring, std::vector<std::uint32_t>& cells) const;
 
