@@ -1,9 +1,12 @@
 // The door-state pipeline: one object, configured by one Parameters struct,
 // running the stages in order:
-//   preprocess   (sanitise, level to a gravity-aligned frame, voxel grid)
-//   segmentation (floor/ceiling histogram, PCA normals, RANSAC walls, region growing)
-//   recognition  (AABB/OBB corners, doorway evidence on each wall, door classification)
-//   state        (leaf fit at the hinge, opening angle, state)
+//   preprocess   (sanitise, voxel grid; then, once the normals are known,
+//                 level to a gravity-aligned frame)
+//   segmentation (neighbour grid, PCA normals, floor/ceiling histogram,
+//                 RANSAC walls, region growing)
+//   recognition  (AABB/OBB corners, doorway evidence on each wall)
+//   state        (leaf fit at the hinge, opening angle, state; state::findDoors
+//                 runs recognition and state and decides which doorways are doors)
 //   reconstruction (walls with their doorways and leaves as they stand)
 // Results are reported in the input's frame. ROS-free.
 #pragma once
