@@ -412,6 +412,24 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   fit.s_hinge = s_h;
   fit.s_latch = fit.closed_in_band ? s_other : s_h + e0 * (fit.length + 0.008);
   if (!fit.found) return fit;
+  if (!fit.closed_in_band && vsd.y() > 0.1) {
+    // What hides the doorway from the sensor, near it: points in front of the
+    // wall whose sight lines, carried on, meet the wall inside the doorway.
+    // A leaf swung towards the sensor is all of it; a cupboard's side taken
+    // for a leaf leaves its front unexplained.
+    std::vector<char> is_inlier(points.size(), 0);
+    for (int i : fit.inliers) is_inlier[i] = 1;
+    int occluders = 0, explained = 0;
+    for (const Local& q : pts) {
+      if (q.d <= p.face_tolerance + 0.02 || q.d >= vsd.y()) continue;
+      const double lam = vsd.y() / (vsd.y() - q.d);
+      const double s_wall = vsd.x() + lam * (q.s - vsd.x());
+      if (s_wall <= door.s0 + 0.05 || s_wall >= door.s1 - 0.05) continue;
+      ++occluders;
+      explained += is_inlier[q.index];
+    }
+    fit.occluders_explained = occluders > 0 ? static_cast<double>(explained) / occluders : 0.0;
+  }
   const double th = fit.angle_deg * M_PI / 180;
   const Eigen::Vector2d dir_sd(std::cos(th) * e0, std::sin(th) * m);
   const double hinge_d = !fit.closed_in_band ? d_h : fit.toward_viewer ? fit.face_d : fit.face_d - lt;

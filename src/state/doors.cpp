@@ -16,6 +16,13 @@ namespace {
 // A closed leaf is a door's only evidence when it covers more than this
 // share of its doorway (no trim, see-through or recess).
 constexpr double kClosedBandEvidence = 0.7;
+// A doorway this much hidden by what stands in front of it (share of its
+// body cells) is searched for a leaf swung towards the sensor, which makes it
+// a door when it explains at least kOwnLeafExplained of what hides it.
+constexpr double kOwnLeafFront = 0.5;
+constexpr double kOwnLeafExplained = 0.6;
+constexpr double kOwnLeafCoverage = 0.6;
+constexpr double kBoxSideDeg = 5.0;
 
 // f(0) ... f(n - 1) over the cores (OpenMP), each at most once; the first
 // exception thrown is rethrown here (none may escape an OpenMP region).
@@ -64,7 +71,9 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
     // the doorway makes it a door (the evidence rule below): skip the search
     // when the wall band holds too little for one.
     const recognition::Doorway& d = c.doorway;
-    const bool other_evidence = d.casing || d.through >= 0.08 || d.recess > 0.3;
+    // A doorway hidden by what stands in front of it may be hidden by its own
+    // leaf swung towards the sensor: searched too (see the evidence rule).
+    const bool other_evidence = d.casing || d.through >= 0.08 || d.recess > 0.3 || d.front >= kOwnLeafFront;
     c.leaf = fitLeaf(pts, walls[c.wall], d, floor_z, thicknessOf(d), viewpoint, p,
                             other_evidence ? 0.0 : kClosedBandEvidence);
   });
@@ -89,8 +98,15 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       }
       // What tells a door from a cupboard or a gap: a closed leaf inside the
       // wall, or trim around the doorway, or the room beyond seen through it.
+      // Or a leaf swung towards the sensor that is itself what hides the
+      // doorway: a cupboard's side taken for a leaf leaves its front unexplained.
+      // A leaf within kBoxSideDeg of square to the wall is not taken on this
+      // evidence: the side of a cupboard against the wall looks just like it.
+      const bool own_leaf_hides = !leaf.closed_in_band && leaf.toward_viewer && d.front >= kOwnLeafFront &&
+                                  leaf.coverage >= kOwnLeafCoverage && leaf.occluders_explained >= kOwnLeafExplained &&
+                                  std::abs(leaf.angle_deg - 90) >= kBoxSideDeg;
       const bool evidence = leaf.closed_in_band ? (d.casing || d.recess > 0.3 || leaf.coverage > kClosedBandEvidence)
-                                                : (d.casing || d.through >= 0.08);
+                                                : (d.casing || d.through >= 0.08 || own_leaf_hides);
       const double height = (std::isfinite(d.top) ? d.top : leaf.top_z) - floor_z;
       const double wall_h = top_z - floor_z;
       const bool tall = height >= p.door_min_height && height >= p.door_height_ratio * wall_h - p.door_height_phi;
@@ -100,11 +116,11 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
         char buf[400];
         std::snprintf(buf, sizeof buf,
                       "wall %zu: doorway s=[%.2f, %.2f] casing=%d face=%.2f through=%.2f front=%.2f recess=%.2f "
-                      "top=%.2f thick=%.2f | leaf found=%d band=%d angle=%.1f cov=%.2f hinge_s0=%d toward=%d | %s",
+                      "top=%.2f thick=%.2f | leaf found=%d band=%d angle=%.1f cov=%.2f explains=%.2f hinge_s0=%d toward=%d | %s",
                       wi, d.s0, d.s1, d.casing, d.face, d.through, d.front, d.recess, d.top - floor_z, d.thickness,
-                      leaf.found, leaf.closed_in_band, leaf.angle_deg, leaf.coverage, leaf.hinge_at_s0,
+                      leaf.found, leaf.closed_in_band, leaf.angle_deg, leaf.coverage, leaf.occluders_explained, leaf.hinge_at_s0,
                       leaf.toward_viewer,
-                      !evidence ? "rejected: no casing, recess or see-through"
+                      !evidence ? "rejected: no casing, recess, see-through or own leaf hiding it"
                                 : !tall ? "rejected: too low" : !wide ? "rejected: width" : "door");
         out.trace.push_back(buf);
       }

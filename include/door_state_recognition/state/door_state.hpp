@@ -38,6 +38,10 @@ struct LeafFit {
   double face_d = 0;            // closed leaf: depth of its visible face (<= 0, behind the wall face)
   double best_angle_deg = 0, best_coverage = 0, best_contradiction = 0;  // best hypothesis, found or not
   int candidate_points = 0, candidate_rays = 0;  // points near the doorway, rays passing it
+  // Leaf found off the wall: share of the points near the doorway that hide
+  // it from the sensor (in front of the wall, sight line meeting the wall
+  // inside the doorway) which lie on the leaf (0 when none or not computed).
+  double occluders_explained = 0;
   bool searched = true;  // false: skipped, no closed leaf could have made it a door (see fitLeaf)
   std::vector<int> inliers;
 };
