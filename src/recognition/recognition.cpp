@@ -280,8 +280,45 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     if (w <= 0.13) legs.push_back({c, e});
     c = e + 1;
   }
+  // Trim seen against its neighbours: a depth camera's noise spreads the
+  // wall's face over centimetres, and a leaf filling much of a small view
+  // tilts or shifts the fitted plane by about the trim's depth, so "out of
+  // the plane" fails; the mean depth of a sub-column (a hundred points or
+  // more) still stands out from both sides, 8-14 cm off, by the trim's depth.
+  {
+    std::vector<double> mean(sub, std::numeric_limits<double>::quiet_NaN());
+    for (int c = 0; c < sub; ++c)
+      if (face_d_n[c] >= 30) mean[c] = face_d_sum[c] / face_d_n[c];
+    auto side = [&](int a, int b) {  // mean of the valid means in [a, b]
+      double sum = 0;
+      int n = 0;
+      for (int k = std::max(0, a); k <= std::min(sub - 1, b); ++k)
+        if (std::isfinite(mean[k])) sum += mean[k], ++n;
+      return n >= 2 ? sum / n : std::numeric_limits<double>::quiet_NaN();
+    };
+    auto stands_out = [&](int c) {
+      const double l = side(c - 7, c - 4), r = side(c + 4, c + 7);
+      return std::isfinite(mean[c]) && std::isfinite(l) && std::isfinite(r) &&
+             mean[c] - std::max(l, r) >= p.casing_min_offset;
+    };
+    for (int c = 0; c < sub;) {
+      if (!stands_out(c)) {
+        ++c;
+        continue;
+      }
+      int e = c;
+      while (e + 1 < sub && stands_out(e + 1)) ++e;
+      const bool known = std::any_of(legs.begin(), legs.end(), [&](const std::pair<int, int>& g) {
+        return g.first <= e && c <= g.second;
+      });
+      if (!known && e > c && (e - c + 1) * half <= 0.13) legs.push_back({c, e});
+      c = e + 1;
+    }
+    std::sort(legs.begin(), legs.end());
+  }
   // 1: trim runs across the doorway above the body; 0: the rows there show
   // wall without trim; -1: nothing is seen there (a camera's view ends lower).
+  constexpr double kHeadSeenFrom = 2.1;  // m above the floor
   auto headState = [&](double a, double b) {
     const int c0 = std::max(0, static_cast<int>((a - s_lo) / cell)), c1 = std::min(cols - 1, static_cast<int>((b - s_lo) / cell));
     bool seen = false;
@@ -293,7 +330,9 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
         o += g.out;
         covered += g.face > 0;
       }
-      seen |= covered >= 0.3 * (c1 - c0 + 1);
+      // Rows below a door's head show its leaf or opening, not the head:
+      // only rows from kHeadSeenFrom up tell that a head would have been seen.
+      if (r * row_h >= kHeadSeenFrom) seen |= covered >= 0.3 * (c1 - c0 + 1);
       // Trim across most of the doorway, not a few trim points at its edge.
       if (f >= 5 && o >= 0.7 * f && covered >= 0.6 * (c1 - c0 + 1)) return 1;
     }
@@ -343,10 +382,10 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     {
       int k = c - 1;
       while (k >= 0 && c - k <= reach_cols && unseen(k)) --k;
-      if (k >= 0 && k < c - 1 && face[k] >= 0.5) lo = k + 1;
+      if (k >= 0 && k < c - 1 && face[k] >= 0.3) lo = k + 1;
       k = e + 1;
       while (k < cols && k - e <= reach_cols && unseen(k)) ++k;
-      if (k < cols && k > e + 1 && face[k] >= 0.5) hi = k - 1;
+      if (k < cols && k > e + 1 && face[k] >= 0.3) hi = k - 1;
     }
     // Jambs where the face points end, refined from the points themselves.
     double s0 = colS(lo), s1 = colS(hi + 1);
@@ -367,6 +406,24 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       s1 = right[right.size() * 3 / 100];
     }
     addCandidate(s0, s1, false);
+    c = e + 1;
+  }
+
+  // (3) A leaf set back in its doorway, seen through depth noise that puts
+  // it within the wall's face tolerance (a depth camera a few metres off):
+  // runs of sub-columns whose face points lie, on average, kSetBack or more
+  // behind the face (the mean of a hundred points is sharp where single
+  // points are not).
+  constexpr double kSetBack = 0.025;
+  for (int c = 0; c < sub;) {
+    auto behind = [&](int k) { return face_d_n[k] >= 10 && face_d_sum[k] / face_d_n[k] <= -kSetBack; };
+    if (!behind(c)) {
+      ++c;
+      continue;
+    }
+    int e = c;
+    while (e + 1 < sub && behind(e + 1)) ++e;
+    addCandidate(subS(c), subS(e + 1), false);
     c = e + 1;
   }
 
