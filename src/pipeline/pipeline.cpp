@@ -116,8 +116,10 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
     watch.total();
     return res;
   }
-  const std::vector<segmentation::WallPlane> walls =
-      segmentation::findWalls(pts, normals, floor_z, top_z, fc.ceiling.has_value(), viewpoint.head<2>().cast<double>(), p);
+  // A camera frame's view ends above and below: a near wall is cut by it.
+  const segmentation::ViewTop view = organized ? segmentation::viewTop(pts, viewpoint) : segmentation::ViewTop{};
+  const std::vector<segmentation::WallPlane> walls = segmentation::findWalls(
+      pts, normals, floor_z, top_z, fc.ceiling.has_value(), viewpoint.head<2>().cast<double>(), p, &view);
   watch.mark("walls");
   for (std::size_t wi = 0; wi < walls.size(); ++wi) {
     char buf[200];

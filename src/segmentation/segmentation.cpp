@@ -4,6 +4,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <random>
 
@@ -175,9 +176,42 @@ void fitLine(const std::vector<Eigen::Vector2d>& pts, Eigen::Vector2d& c, Eigen:
 
 }  // namespace
 
+namespace {
+constexpr int kViewTopBins = 1440;  // bearing bins (pseudo-angle), about 0.25 deg
+// A wall's top within this of the view's top (tan of elevation) was cut by the view.
+constexpr float kViewTopSlack = 0.02f;
+}  // namespace
+
+int ViewTop::bin(const Eigen::Vector3f& q) const {
+  // Pseudo-angle in [0, 4): monotonic in the bearing, no atan2.
+  const float dx = q.x() - viewpoint.x(), dy = q.y() - viewpoint.y();
+  const float den = std::abs(dx) + std::abs(dy);
+  if (den <= 0) return -1;
+  const float r = dy / den;  // [-1, 1]
+  const float a = dx >= 0 ? (dy >= 0 ? r : 4 + r) : 2 - r;
+  return std::min(kViewTopBins - 1, static_cast<int>(a * (kViewTopBins / 4)));
+}
+
+float ViewTop::tanElevation(const Eigen::Vector3f& q) const {
+  const float h = std::hypot(q.x() - viewpoint.x(), q.y() - viewpoint.y());
+  return h > 1e-3f ? (q.z() - viewpoint.z()) / h : 0.0f;
+}
+
+ViewTop viewTop(const Points& points, const Eigen::Vector3f& viewpoint) {
+  ViewTop v;
+  v.viewpoint = viewpoint;
+  v.max_tan.assign(kViewTopBins, -std::numeric_limits<float>::infinity());
+  for (const auto& q : points) {
+    const int b = v.bin(q);
+    if (b >= 0) v.max_tan[b] = std::max(v.max_tan[b], v.tanElevation(q));
+  }
+  return v;
+}
+
 void addWallSegments(const Points& points, const std::vector<int>& inliers, const Eigen::Vector2d& point,
                      const Eigen::Vector2d& direction, const Eigen::Vector2d& normal, double floor_z, double height_top,
-                     bool ceiling_known, const Parameters& p, std::vector<WallPlane>& walls) {
+                     bool ceiling_known, const Parameters& p, std::vector<WallPlane>& walls,
+                     const ViewTop* view) {
   const double room_h = height_top - floor_z;
   // Split along the wall at gaps wider than wall_gap.
   std::vector<std::pair<double, int>> along;
@@ -201,8 +235,27 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
     }
     start = k;
     const double h = w.z_max - floor_z;
-    const bool tall = h >= p.wall_height_ratio * room_h && w.z_min < floor_z + 0.5;
-    const bool reaches_top = !ceiling_known || w.z_max > height_top - 0.25;
+
+    // Or the view's top: the highest points of the wall are the highest seen
+    // on most of its bearings (a camera frame cuts a near wall below the ceiling).
+    auto cutByView = [&]() {
+      if (!view || view->max_tan.empty()) return false;
+      std::vector<float> top(view->max_tan.size(), -std::numeric_limits<float>::infinity());
+      for (int i : w.inliers) {
+        const auto& q = points[i];
+        const int b = view->bin(q);
+        if (b >= 0) top[b] = std::max(top[b], view->tanElevation(q));
+      }
+      int bins = 0, cut = 0;
+      for (std::size_t b = 0; b < top.size(); ++b)
+        if (std::isfinite(top[b])) ++bins, cut += top[b] >= view->max_tan[b] - kViewTopSlack;
+      return bins > 0 && cut >= 0.5 * bins;
+    };
+    const bool cut = cutByView();
+    const bool reaches_top = !ceiling_known || w.z_max > height_top - 0.25 || cut;
+    // Tall: from near the floor up to the share of the room a wall spans, or
+    // (cut by the view) as high as a door at least.
+    const bool tall = (h >= p.wall_height_ratio * room_h || (cut && h >= p.door_min_height)) && w.z_min < floor_z + 0.5;
     // A plane parallel to a stronger wall and close behind or before it
     // (a recessed leaf, trim, a cupboard front) is not another wall.
     bool shadowed = false;
@@ -224,7 +277,8 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
 }
 
 std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, double floor_z, double height_top,
-                                 bool ceiling_known, const Eigen::Vector2d& viewpoint, const Parameters& p) {
+                                 bool ceiling_known, const Eigen::Vector2d& viewpoint, const Parameters& p,
+                                 const ViewTop* view) {
   std::vector<int> pool;
   for (std::size_t i = 0; i < points.size(); ++i)
     if (std::abs(normals.n[i].z()) < p.vertical_normal_z && points[i].z() > floor_z + 0.05) pool.push_back(static_cast<int>(i));
@@ -292,7 +346,7 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
     }
     const Eigen::Vector2d dir(best_n.y(), -best_n.x());
     if ((viewpoint - best_pt).dot(best_n) < 0) best_n = -best_n;
-    addWallSegments(points, inl, best_pt, dir, best_n, floor_z, height_top, ceiling_known, p, walls);
+    addWallSegments(points, inl, best_pt, dir, best_n, floor_z, height_top, ceiling_known, p, walls, view);
   }
   return walls;
 }

@@ -411,6 +411,13 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   }
   fit.s_hinge = s_h;
   fit.s_latch = fit.closed_in_band ? s_other : s_h + e0 * (fit.length + 0.008);
+  // An open leaf seen only in part (cut by the edge of a camera's view, or
+  // hidden in part) is shorter than any door; a doorway seen through from
+  // jamb to jamb gives the door's width instead.
+  if (fit.found && !fit.closed_in_band && fit.length < p.door_min_width && door.through >= 0.4) {
+    const double span = std::abs(s_other - s_h);
+    if (span >= p.door_min_width && span <= p.door_max_width) fit.s_latch = s_other;
+  }
   if (!fit.found) return fit;
   if (!fit.closed_in_band && vsd.y() > 0.1) {
     // What hides the doorway from the sensor, near it: points in front of the

@@ -53,13 +53,26 @@ struct WallPlane {
   double along(const Eigen::Vector3f& p) const { return (Eigen::Vector2d(p.x(), p.y()) - point).dot(direction); }
 };
 
+// The top of what a sensor saw, by bearing from its viewpoint: the highest
+// elevation (as tan) of any point in each bearing bin. A wall whose visible
+// top is the highest thing seen on its bearings was cut by the edge of the
+// view (a camera frame), not by its own height.
+struct ViewTop {
+  Eigen::Vector3f viewpoint = Eigen::Vector3f::Zero();
+  std::vector<float> max_tan;  // per bearing bin; empty: not known
+  int bin(const Eigen::Vector3f& q) const;
+  float tanElevation(const Eigen::Vector3f& q) const;
+};
+ViewTop viewTop(const Points& points, const Eigen::Vector3f& viewpoint);
+
 // Iterative 1-point RANSAC of vertical planes (a point and its normal
 // propose a plane), refined by total least squares, split at gaps, kept when
 // the segment spans wall_height_ratio of the room height and reaches near the
-// ceiling (when seen). `height_top` is the ceiling or, without one, the top
-// of the vertical structure.
+// ceiling (when seen) or the top of the view (`view`, when given).
+// `height_top` is the ceiling or, without one, the top of the vertical structure.
 std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, double floor_z, double height_top,
-                                 bool ceiling_known, const Eigen::Vector2d& viewpoint, const Parameters& p);
+                                 bool ceiling_known, const Eigen::Vector2d& viewpoint, const Parameters& p,
+                                 const ViewTop* view = nullptr);
 
 // The wall rules of findWalls for one plane's inliers: split along the wall
 // at gaps wider than wall_gap, and append to `walls` each segment that spans
@@ -68,7 +81,8 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
 // and `normal` (unit, horizontal) give the segment's frame.
 void addWallSegments(const Points& points, const std::vector<int>& inliers, const Eigen::Vector2d& point,
                      const Eigen::Vector2d& direction, const Eigen::Vector2d& normal, double floor_z, double height_top,
-                     bool ceiling_known, const Parameters& p, std::vector<WallPlane>& walls);
+                     bool ceiling_known, const Parameters& p, std::vector<WallPlane>& walls,
+                     const ViewTop* view = nullptr);
 
 // Region growing (paper 3.1, [22]) over the points where mask != 0: a region
 // grows to neighbours whose normals differ by less than region_angle_deg and
