@@ -319,3 +319,25 @@ TEST(Evaluation, MalformedInputThrows) {
   expectThrow(json::array(), good_r, "truth");
   expectThrow(good_t, json(nullptr), "report");
 }
+
+TEST(Evaluation, AnglesGivenAsLowerBoundsCountInTheMaeButNotTheMeasuredMae) {
+  // Two doors: one measured 2 deg off, one whose leaf was unseen, reported
+  // at its free-space bound 95 deg against a true 110 (15 deg off).
+  json t = truthDoc({truthDoor(vec(0, 0, 0), vec(-0.45, 0, 0), 30, "semi_open"),
+                     truthDoor(vec(3, 0, 0), vec(2.55, 0, 0), 110, "open")});
+  json bound = reportDoor(1, vec(3, 0, 0), vec(2.55, 0, 0), 95, "open");
+  bound["angle_is_lower_bound"] = true;
+  json r = reportDoc({reportDoor(0, vec(0, 0, 0), vec(-0.45, 0, 0), 32, "semi_open"), bound});
+  const EvalResult res = evaluate(t, r);
+  ASSERT_EQ(res.matched, 2);
+  EXPECT_EQ(res.state_correct, 2);
+  EXPECT_FALSE(res.matches[0].angle_is_lower_bound);
+  EXPECT_TRUE(res.matches[1].angle_is_lower_bound);
+  EXPECT_NEAR(res.angleMaeDeg(), 8.5, 1e-9);
+  EXPECT_NEAR(res.angleMaeMeasuredDeg(), 2.0, 1e-9);
+  const json j = dsr::eval::toJson(res);
+  EXPECT_EQ(j["angle_lower_bounds"], 1);
+  EXPECT_NEAR(j["angle_mae_measured_deg"].get<double>(), 2.0, 1e-9);
+  // Without the field every angle counts as measured.
+  EXPECT_NEAR(single(vec(0, 0, 0)).angleMaeMeasuredDeg(), 0.0, 1e-12);
+}

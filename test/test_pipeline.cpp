@@ -342,6 +342,27 @@ TEST(DoorState, CameraFramesShowDoorsThroughNoiseAndACutView) {
   }
 }
 
+TEST(DoorState, AnUnseenLeafInADoorwaySeenThroughIsOpenByAtLeastTheFreeSpaceBound) {
+  // Camera frames of doorways whose leaf swung away past 90 deg, behind the
+  // wall and out of sight: no leaf is fitted, but every hypothesis short of
+  // the bound would block rays that went through, so the door is open (the
+  // state is certain) and the angle is a lower bound, flagged as such.
+  for (const std::uint64_t seed : {1027ull, 2005ull, 2016ull}) {
+    const Scored s = runScene(sim::randomRoom(seed), seed, "rgbd");
+    SCOPED_TRACE(::testing::Message() << "seed=" << seed << " " << describe(s) << trace(s));
+    ASSERT_EQ(s.eval.matched, 1);
+    EXPECT_EQ(s.eval.reported_doors, 1);
+    EXPECT_EQ(s.eval.state_correct, 1);
+    const DoorResult& d = s.result.doors.at(static_cast<std::size_t>(s.eval.matches[0].report_index));
+    EXPECT_TRUE(d.angle_is_lower_bound);
+    EXPECT_EQ(d.state, DoorStateKind::Open);
+    EXPECT_EQ(d.swing, Swing::Unknown);
+    EXPECT_LT(d.confidence, 0.5);
+    const double truth = s.truth["doors"][s.eval.matches[0].truth_index]["opening_angle_deg"].get<double>();
+    EXPECT_LE(d.opening_angle_deg, truth + 2.0);  // a bound from below (2 deg steps)
+  }
+}
+
 TEST(DoorState, CameraFramesFindTheDoorInView) {
   // 12 simulated 640x480 RGB-D frames (camera optical frame, up -y, no
   // ceiling in view), the camera looking at one door of a random room. Held at

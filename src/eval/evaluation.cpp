@@ -21,6 +21,7 @@ struct Door {
   double angle;
   std::string state;
   bool out_of_view = false;  // truth only: "in_view": false
+  bool lower_bound = false;  // report only: "angle_is_lower_bound": true
 };
 
 [[noreturn]] void fail(const std::string& where, const std::string& what) {
@@ -61,6 +62,8 @@ std::vector<Door> parseDoors(const json& doc, const std::string& name) {
                      vec3(field(d, "hinge", w), w + ".hinge"),
                      number(field(d, "opening_angle_deg", w), w + ".opening_angle_deg"),
                      state.get<std::string>()});
+    const auto lb = d.find("angle_is_lower_bound");
+    doors.back().lower_bound = lb != d.end() && lb->is_boolean() && lb->get<bool>();
   }
   return doors;
 }
@@ -91,6 +94,13 @@ double EvalResult::stateAccuracy() const { return matched == 0 ? kNaN : double(s
 double EvalResult::angleMaeDeg() const {
   std::vector<double> v;
   for (const auto& m : matches) v.push_back(m.angle_error_deg);
+  return meanOf(v);
+}
+
+double EvalResult::angleMaeMeasuredDeg() const {
+  std::vector<double> v;
+  for (const auto& m : matches)
+    if (!m.angle_is_lower_bound) v.push_back(m.angle_error_deg);
   return meanOf(v);
 }
 
@@ -148,7 +158,8 @@ EvalResult evaluate(const json& truth, const json& report, double max_center_dis
       continue;
     }
     const bool ok = t[i].state == r[j].state;
-    res.matches.push_back({i, j, dist, ok, std::abs(r[j].angle - t[i].angle), (r[j].hinge - t[i].hinge).norm()});
+    res.matches.push_back(
+        {i, j, dist, ok, std::abs(r[j].angle - t[i].angle), (r[j].hinge - t[i].hinge).norm(), r[j].lower_bound});
     res.state_correct += ok;
   }
   res.matched = int(res.matches.size());
@@ -169,7 +180,8 @@ json toJson(const EvalResult& res) {
                        {"center_distance_m", numOrNull(m.center_distance_m)},
                        {"state_correct", m.state_correct},
                        {"angle_error_deg", numOrNull(m.angle_error_deg)},
-                       {"hinge_error_m", numOrNull(m.hinge_error_m)}});
+                       {"hinge_error_m", numOrNull(m.hinge_error_m)},
+                       {"angle_is_lower_bound", m.angle_is_lower_bound}});
   return {{"true_doors", res.true_doors},
           {"reported_doors", res.reported_doors},
           {"matched", res.matched},
@@ -178,6 +190,9 @@ json toJson(const EvalResult& res) {
           {"recall", numOrNull(res.recall())},
           {"state_accuracy", numOrNull(res.stateAccuracy())},
           {"angle_mae_deg", numOrNull(res.angleMaeDeg())},
+          {"angle_mae_measured_deg", numOrNull(res.angleMaeMeasuredDeg())},
+          {"angle_lower_bounds", std::count_if(res.matches.begin(), res.matches.end(),
+                                               [](const DoorMatch& m) { return m.angle_is_lower_bound; })},
           {"hinge_error_mean_m", numOrNull(res.hingeErrorMeanM())},
           {"hinge_error_median_m", numOrNull(res.hingeErrorMedianM())},
           {"matches", matches},

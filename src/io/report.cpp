@@ -38,6 +38,7 @@ nlohmann::json reportJson(const PipelineResult& r, const std::string& input) {
                           {"wall_id", d.wall_id ? nlohmann::json(*d.wall_id) : nlohmann::json(nullptr)},
                           {"state", toString(d.state)},
                           {"opening_angle_deg", d.opening_angle_deg},
+                          {"angle_is_lower_bound", d.angle_is_lower_bound},
                           {"confidence", d.confidence},
                           {"hinge", vec(d.hinge)},
                           {"opening_center", vec(d.opening_center)},

@@ -395,6 +395,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
       s.state = static_cast<std::uint8_t>(d.state);
       s.opening_angle = static_cast<float>(d.opening_angle_deg * M_PI / 180.0);
       s.confidence = static_cast<float>(d.confidence);
+      s.angle_is_lower_bound = d.angle_is_lower_bound;
       s.hinge = tf2::toMsg(d.hinge);
       s.opening_center = tf2::toMsg(d.opening_center);
       s.wall_normal.x = d.wall_normal.x();

@@ -418,6 +418,52 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     const double span = std::abs(s_other - s_h);
     if (span >= p.door_min_width && span <= p.door_max_width) fit.s_latch = s_other;
   }
+  if (!fit.found && (door.casing || door.through >= 0.4) && band_cov < 0.3) {
+    // No leaf seen in a doorway beyond doubt, and none closed in it: where
+    // could a leaf of the doorway's width stand without blocking a ray that
+    // went through (free space)? For each hinge and swing side, the least
+    // angle a leaf there is not contradicted at (more than 3% of its cells
+    // crossed by rays); the least over all four bounds the opening angle
+    // from below. A leaf swung behind its wall, out of sight, leaves a high bound.
+    const int nl = std::max(1, static_cast<int>(std::ceil(L / abin)));
+    std::vector<char> crossed(static_cast<std::size_t>(nl) * nz);
+    double bound = 180;
+    for (int h = 0; h < 2; ++h)
+      for (int sw = 0; sw < 2; ++sw) {
+        const double sh = h == 0 ? door.s0 : door.s1, ee = h == 0 ? 1.0 : -1.0, mm = sw == 0 ? 1.0 : -1.0;
+        const Eigen::Vector2d H(sh, sw == 0 ? 0.0 : -t);
+        for (int deg = 0; deg < bound && deg <= 170; deg += 2) {
+          const double th = deg * M_PI / 180;
+          const Eigen::Vector2d e(std::cos(th) * ee, std::sin(th) * mm), k(std::sin(th) * ee, -std::cos(th) * mm);
+          const Eigen::Vector2d P = H + k * (lt / 2);
+          std::fill(crossed.begin(), crossed.end(), 0);
+          int n = 0;
+          for (const Ray& ray : rays) {
+            const Eigen::Vector2d r = ray.q - ray.v;
+            const double denom = r.x() * e.y() - r.y() * e.x();
+            if (std::abs(denom) < 1e-9) continue;
+            const Eigen::Vector2d w0 = P - ray.v;
+            const double lam = (w0.x() * e.y() - w0.y() * e.x()) / denom;
+            const double a = (w0.x() * r.y() - w0.y() * r.x()) / denom;
+            if (a < 0.05 || a >= L || lam <= 0 || lam > 1 - 0.06 / ray.len) continue;
+            const double z = ray.vz + lam * (ray.qz - ray.vz);
+            if (z < z0 || z >= z1) continue;
+            char& f = crossed[static_cast<std::size_t>(std::min(nl - 1, static_cast<int>(a / abin))) * nz +
+                              std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
+            if (!f) f = 1, ++n;
+          }
+          if (n <= 0.03 * nl * nz) {
+            if (deg < bound) {
+              bound = deg;
+              fit.hinge_at_s0 = h == 0;
+              fit.toward_viewer = sw == 0;
+            }
+            break;
+          }
+        }
+      }
+    fit.free_from_deg = bound;
+  }
   if (!fit.found) return fit;
   if (!fit.closed_in_band && vsd.y() > 0.1) {
     // What hides the doorway from the sensor, near it: points in front of the

@@ -23,6 +23,8 @@ constexpr double kOwnLeafFront = 0.5;
 constexpr double kOwnLeafExplained = 0.6;
 constexpr double kOwnLeafCoverage = 0.6;
 constexpr double kBoxSideDeg = 5.0;
+// A door whose leaf was not seen (its angle a lower bound from free space).
+constexpr double kUnseenLeafConfidence = 0.3;
 
 // f(0) ... f(n - 1) over the cores (OpenMP), each at most once; the first
 // exception thrown is rethrown here (none may escape an OpenMP region).
@@ -83,18 +85,36 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       const segmentation::WallPlane& wall = walls[wi];
       const recognition::Doorway& d = cand.doorway;
       const double t = thicknessOf(d);
-      const LeafFit& leaf = cand.leaf;
+      LeafFit leaf = cand.leaf;
+      // A leaf not seen, in a doorway seen through, that free space puts at
+      // open_from_deg or more: the door is open, by at least that bound.
+      const bool open_unseen = !leaf.found && std::isfinite(leaf.free_from_deg) && leaf.free_from_deg >= p.open_from_deg &&
+                               leaf.free_from_deg <= 170;
       if (!leaf.found) {
         char buf[400];
         std::snprintf(buf, sizeof buf,
                       "wall %zu: doorway s=[%.2f, %.2f] casing=%d through=%.2f front=%.2f recess=%.2f top=%.2f "
-                      "thick=%.2f | no leaf (%s: %.0f deg, coverage %.2f, contradicted %.2f; %d points, %d rays)",
+                      "thick=%.2f | no leaf (%s: %.0f deg, coverage %.2f, contradicted %.2f; %d points, %d rays; "
+                      "free from %.0f deg)%s",
                       wi, d.s0, d.s1, d.casing, d.through, d.front, d.recess, d.top - floor_z, d.thickness,
                       leaf.searched ? "best" : "not searched, no evidence and wall band",
                       leaf.best_angle_deg, leaf.best_coverage, leaf.best_contradiction, leaf.candidate_points,
-                      leaf.candidate_rays);
+                      leaf.candidate_rays, leaf.free_from_deg, open_unseen ? " | open, leaf unseen" : "");
         out.trace.push_back(buf);
-        continue;
+        if (!open_unseen) continue;
+        // The leaf where the bound puts it, the doorway's width long.
+        const double e0 = leaf.hinge_at_s0 ? 1.0 : -1.0, m = leaf.toward_viewer ? 1.0 : -1.0;
+        leaf.found = true;
+        leaf.angle_deg = leaf.free_from_deg;
+        leaf.coverage = 0;
+        leaf.s_hinge = leaf.hinge_at_s0 ? d.s0 : d.s1;
+        leaf.s_latch = leaf.hinge_at_s0 ? d.s1 : d.s0;
+        leaf.length = std::max(0.1, d.width() - 0.008);
+        const double th = leaf.angle_deg * M_PI / 180;
+        const Eigen::Vector2d dir_sd(std::cos(th) * e0, std::sin(th) * m);
+        leaf.hinge = wall.point + leaf.s_hinge * wall.direction + (leaf.toward_viewer ? 0.0 : -t) * wall.normal;
+        leaf.direction = (dir_sd.x() * wall.direction + dir_sd.y() * wall.normal).normalized();
+        leaf.top_z = std::isfinite(d.top) ? d.top : floor_z + 2.0;
       }
       // What tells a door from a cupboard or a gap: a closed leaf inside the
       // wall, or trim around the doorway, or the room beyond seen through it.
@@ -129,10 +149,12 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       DoorResult door;
       door.wall_id = static_cast<int>(wi);
       door.opening_angle_deg = leaf.angle_deg;
+      door.angle_is_lower_bound = open_unseen;
       door.state = classify(leaf.angle_deg, p);
       // Confidence: how much of the leaf was seen, and how sure the doorway is.
-      door.confidence = std::min(1.0, leaf.coverage) * (d.casing || d.through >= 0.4 ? 1.0 : 0.7);
-      door.swing = leaf.toward_viewer ? Swing::TowardViewer : Swing::AwayFromViewer;
+      door.confidence = open_unseen ? kUnseenLeafConfidence
+                                    : std::min(1.0, leaf.coverage) * (d.casing || d.through >= 0.4 ? 1.0 : 0.7);
+      door.swing = open_unseen ? Swing::Unknown : leaf.toward_viewer ? Swing::TowardViewer : Swing::AwayFromViewer;
       const Eigen::Vector2d n2 = leaf.toward_viewer ? wall.normal : Eigen::Vector2d(-wall.normal);
       door.wall_normal = toInput(Eigen::Vector3d(n2.x(), n2.y(), 0));
       door.hinge = toInput(onFloor(leaf.hinge));

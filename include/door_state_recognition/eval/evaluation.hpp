@@ -17,6 +17,7 @@ struct DoorMatch {
   bool state_correct;        // state strings equal
   double angle_error_deg;    // |reported - true| opening angle
   double hinge_error_m;      // 3D distance between hinges
+  bool angle_is_lower_bound = false;  // the report gave the angle as a lower bound (leaf unseen)
 };
 
 struct EvalResult {
@@ -29,6 +30,9 @@ struct EvalResult {
   double recall() const;             // matched / true; 1.0 when true == 0
   double stateAccuracy() const;      // state_correct / matched; NaN when matched == 0
   double angleMaeDeg() const;        // mean angle error; NaN when no matches
+  // Mean angle error over the matches whose angle was measured (not given
+  // as a lower bound); NaN when none. angleMaeDeg() counts every match.
+  double angleMaeMeasuredDeg() const;
   double hingeErrorMeanM() const;    // mean hinge error; NaN when no matches
   double hingeErrorMedianM() const;  // median hinge error; NaN when no matches
 };

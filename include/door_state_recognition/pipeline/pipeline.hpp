@@ -44,6 +44,9 @@ struct DoorResult {
   std::optional<int> wall_id;
   DoorStateKind state = DoorStateKind::Closed;
   double opening_angle_deg = 0;
+  // The leaf was not seen: free space puts it at opening_angle_deg or more
+  // (state open), e.g. swung behind its wall out of the sensor's sight.
+  bool angle_is_lower_bound = false;
   double confidence = 0;
   Eigen::Vector3d hinge, opening_center;
   Eigen::Vector3d wall_normal;  // horizontal unit, towards the side the leaf swings to

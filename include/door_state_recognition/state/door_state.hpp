@@ -7,6 +7,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <limits>
 #include <vector>
 
 #include "door_state_recognition/pipeline/parameters.hpp"
@@ -42,6 +43,11 @@ struct LeafFit {
   // it from the sensor (in front of the wall, sight line meeting the wall
   // inside the doorway) which lie on the leaf (0 when none or not computed).
   double occluders_explained = 0;
+  // No leaf found in a doorway beyond doubt: the least opening angle at
+  // which a leaf of the doorway's width blocks no ray that went through
+  // (hinge_at_s0 and toward_viewer say where); a lower bound of the opening
+  // angle. NaN when not computed.
+  double free_from_deg = std::numeric_limits<double>::quiet_NaN();
   bool searched = true;  // false: skipped, no closed leaf could have made it a door (see fitLeaf)
   std::vector<int> inliers;
 };
