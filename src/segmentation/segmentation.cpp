@@ -201,11 +201,23 @@ ViewTop viewTop(const Points& points, const Eigen::Vector3f& viewpoint) {
   ViewTop v;
   v.viewpoint = viewpoint;
   v.max_tan.assign(kViewTopBins, -std::numeric_limits<float>::infinity());
+  v.min_tan.assign(kViewTopBins, std::numeric_limits<float>::infinity());
   for (const auto& q : points) {
     const int b = v.bin(q);
-    if (b >= 0) v.max_tan[b] = std::max(v.max_tan[b], v.tanElevation(q));
+    if (b < 0) continue;
+    const float t = v.tanElevation(q);
+    v.max_tan[b] = std::max(v.max_tan[b], t);
+    v.min_tan[b] = std::min(v.min_tan[b], t);
   }
   return v;
+}
+
+bool ViewTop::inView(const Eigen::Vector3f& q, float slack) const {
+  if (max_tan.empty()) return true;
+  const int b = bin(q);
+  if (b < 0) return true;
+  const float t = tanElevation(q);
+  return t >= min_tan[b] - slack && t <= max_tan[b] + slack;
 }
 
 void addWallSegments(const Points& points, const std::vector<int>& inliers, const Eigen::Vector2d& point,

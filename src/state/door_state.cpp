@@ -52,7 +52,7 @@ struct Local {  // a point in wall coordinates: s along, d towards the viewer
 
 LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlane& wall,
                 const recognition::Doorway& door, double floor_z, double t, const Eigen::Vector3f& viewpoint,
-                const Parameters& p, double closed_band_only_above) {
+                const Parameters& p, double closed_band_only_above, const segmentation::ViewTop* view) {
   LeafFit fit;
   const double w = door.width(), L = std::max(0.1, w - 0.008), lt = p.leaf_thickness, tol = p.leaf_tolerance;
   const double z0 = floor_z + 0.25;
@@ -360,7 +360,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     fit.coverage = band_cov;
     for (const Local& q : band) fit.inliers.push_back(q.index);
     s_h = best_h == 0 ? door.s0 : door.s1;  // a closed leaf fills its doorway from jamb to jamb
-  } else if (gen_cov >= 0.1 && gen_contra < 0.1) {
+  } else if ((gen_cov >= 0.1 || (view && gen_cov >= 0.05)) && gen_contra < 0.1) {
     // Refine: a TLS line through the inliers gives the angle; where it meets
     // the wall face on the swing side is the hinge (the doorway's edge seen
     // from the wall can be off where the leaf shadows the wall).
@@ -401,7 +401,28 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     // A doorway beyond doubt (trim, or the room beyond seen through it) takes
     // a leaf seen only edge-on or in part, as long as no ray contradicts it.
     const bool sure_doorway = door.casing || door.through >= 0.4;
-    if (cov >= p.min_leaf_coverage || (sure_doorway && cov >= 0.5 * p.min_leaf_coverage && gen_contra <= 0.05)) {
+    // A leaf cut by the edge of a camera's view: its share of cells inside
+    // the view holding points (as above, relaxed in a doorway beyond doubt),
+    // where at least a quarter of it is inside.
+    double in_view = 1.0;
+    if (view) {
+      const double th = angle * M_PI / 180;
+      const Eigen::Vector2d e(std::cos(th) * e0, std::sin(th) * m), k(std::sin(th) * e0, -std::cos(th) * m);
+      const int nl = std::max(1, static_cast<int>(std::ceil(len / abin)));
+      int inside = 0;
+      for (int i = 0; i < nl; ++i) {
+        const Eigen::Vector2d sd = Eigen::Vector2d(s_h, d_h) + e * ((i + 0.5) * abin) + k * (lt / 2);
+        const Eigen::Vector2d xy = toXY(sd.x(), sd.y());
+        for (int zb = 0; zb < nz; ++zb)
+          inside += view->inView(Eigen::Vector3f(static_cast<float>(xy.x()), static_cast<float>(xy.y()),
+                                                 static_cast<float>(z0 + (zb + 0.5) * zbin)));
+      }
+      in_view = static_cast<double>(inside) / (static_cast<double>(nl) * nz);
+    }
+    const bool cut_by_view = in_view >= 0.25 && in_view < 0.9 && gen_contra <= 0.05 &&
+                             cov >= (sure_doorway ? 0.5 : 1.0) * p.min_leaf_coverage * in_view;
+    if (cov >= p.min_leaf_coverage || (sure_doorway && cov >= 0.5 * p.min_leaf_coverage && gen_contra <= 0.05) ||
+        cut_by_view) {
       fit.found = true;
       fit.coverage = cov;
       fit.angle_deg = angle;

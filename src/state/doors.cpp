@@ -63,6 +63,9 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
     recognition::Doorway doorway;
     LeafFit leaf;
   };
+  // A camera frame's view ends on every side: what a leaf shows is judged
+  // against the part of it inside the view.
+  const segmentation::ViewTop view = organized ? segmentation::viewTop(pts, viewpoint) : segmentation::ViewTop{};
   std::vector<Candidate> candidates;
   for (std::size_t wi = 0; wi < walls.size(); ++wi)
     for (const recognition::Doorway& d : doorways[wi]) candidates.push_back({wi, d, {}});
@@ -77,7 +80,7 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
     // leaf swung towards the sensor: searched too (see the evidence rule).
     const bool other_evidence = d.casing || d.through >= 0.08 || d.recess > 0.3 || d.front >= kOwnLeafFront;
     c.leaf = fitLeaf(pts, walls[c.wall], d, floor_z, thicknessOf(d), viewpoint, p,
-                            other_evidence ? 0.0 : kClosedBandEvidence);
+                            other_evidence ? 0.0 : kClosedBandEvidence, organized ? &view : nullptr);
   });
   for (const Candidate& cand : candidates) {
     {

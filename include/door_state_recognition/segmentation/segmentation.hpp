@@ -59,9 +59,12 @@ struct WallPlane {
 // view (a camera frame), not by its own height.
 struct ViewTop {
   Eigen::Vector3f viewpoint = Eigen::Vector3f::Zero();
-  std::vector<float> max_tan;  // per bearing bin; empty: not known
+  std::vector<float> max_tan, min_tan;  // per bearing bin (+-inf where nothing); empty: not known
   int bin(const Eigen::Vector3f& q) const;
   float tanElevation(const Eigen::Vector3f& q) const;
+  // Within what the sensor saw: a bearing with returns, between the lowest
+  // and highest seen on it (give or take `slack` in tan of elevation).
+  bool inView(const Eigen::Vector3f& q, float slack = 0.02f) const;
 };
 ViewTop viewTop(const Points& points, const Eigen::Vector3f& viewpoint);
 

@@ -52,13 +52,16 @@ struct LeafFit {
   std::vector<int> inliers;
 };
 
+// `view` (a camera frame's extent) makes a leaf cut by the edge of the view
+// judged by the part of it inside.
 // `closed_band_only_above` > 0 says that only a closed leaf inside the wall
 // covering more than that share of the doorway could make it a door (the
 // caller found no other evidence): when the points in the wall band cover
 // less, the search is skipped (searched = false, found = false).
 LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlane& wall,
                 const recognition::Doorway& doorway, double floor_z, double thickness,
-                const Eigen::Vector3f& viewpoint, const Parameters& p, double closed_band_only_above = 0);
+                const Eigen::Vector3f& viewpoint, const Parameters& p, double closed_band_only_above = 0,
+                const segmentation::ViewTop* view = nullptr);
 
 DoorStateKind classify(double angle_deg, const Parameters& p);
 
