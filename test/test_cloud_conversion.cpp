@@ -103,6 +103,32 @@ TEST(CloudConversion, EmptyCloudIsValidAndConvertsToNothing) {
   EXPECT_EQ(c.size(), 0u);
 }
 
+// Rows padded past width * point_step (allowed by sensor_msgs/PointCloud2):
+// each row is read from its own start, the padding skipped.
+TEST(CloudConversion, PaddedRowsAreReadRowByRow) {
+  Msg m = xyzCloud(4, 3);
+  pcl::PointCloud<pcl::PointXYZ> plain;
+  toPcl(m, plain);
+  const std::uint32_t pad = 12, old_step = m.row_step;
+  std::vector<std::uint8_t> data(std::size_t(old_step + pad) * m.height, 0xAB);  // padding bytes are garbage
+  for (std::uint32_t r = 0; r < m.height; ++r)
+    std::copy(m.data.begin() + std::size_t(r) * old_step, m.data.begin() + std::size_t(r + 1) * old_step,
+              data.begin() + std::size_t(r) * (old_step + pad));
+  m.row_step = old_step + pad;
+  m.data = data;
+  ASSERT_EQ(validate(m, kMax), "");
+  pcl::PointCloud<pcl::PointXYZ> padded;
+  toPcl(m, padded);
+  ASSERT_EQ(padded.size(), plain.size());
+  EXPECT_EQ(padded.width, 4u);
+  EXPECT_EQ(padded.height, 3u);
+  for (std::size_t i = 0; i < plain.size(); ++i) {
+    EXPECT_EQ(padded[i].x, plain[i].x) << i;
+    EXPECT_EQ(padded[i].y, plain[i].y) << i;
+    EXPECT_EQ(padded[i].z, plain[i].z) << i;
+  }
+}
+
 // Each malformed message is refused, with a reason that names the fault.
 TEST(CloudConversion, MalformedMessagesAreRefusedWithAReason) {
   struct Case {
@@ -121,6 +147,10 @@ TEST(CloudConversion, MalformedMessagesAreRefusedWithAReason) {
          m.data.resize(std::size_t(m.width) * m.height * 8);
        }, "field z lies outside point_step"},
       {"row_step wrong", [](Msg& m) { m.row_step += 1; }, "row_step"},
+      {"row_step shorter than a row", [](Msg& m) {
+         m.row_step -= 4;
+         m.data.resize(std::size_t(m.row_step) * m.height);
+       }, "is shorter than width*point_step"},
       {"no z", [](Msg& m) { m.fields.erase(m.fields.begin() + 2); }, "field z is missing"},
       {"x twice", [](Msg& m) { m.fields.push_back(field("x", 12, PointField::FLOAT32)); }, "field x is missing, duplicated"},
       {"y count 2", [](Msg& m) { m.fields[1].count = 2; }, "field y is missing, duplicated or has count != 1"},

@@ -39,12 +39,14 @@ std::string validate(const sensor_msgs::PointCloud2& msg, std::size_t max_points
   // overflow, so check the product of the first two against the third.
   if (msg.point_step > 0 && n > std::numeric_limits<std::uint64_t>::max() / msg.point_step)
     return "width * height * point_step overflows";
-  const std::uint64_t expected = n * msg.point_step;
+  // Rows may be padded (row_step > width * point_step); the data holds
+  // exactly row_step * height bytes. Both products fit in 64 bits (2^32 * 2^32).
+  const std::uint64_t row_bytes = static_cast<std::uint64_t>(msg.width) * msg.point_step;
+  if (msg.height > 0 && row_bytes > msg.row_step)
+    return "row_step " + std::to_string(msg.row_step) + " is shorter than width*point_step " + std::to_string(row_bytes);
+  const std::uint64_t expected = static_cast<std::uint64_t>(msg.row_step) * msg.height;
   if (expected != msg.data.size())
-    return "data holds " + std::to_string(msg.data.size()) + " bytes but width*height*point_step is " +
-           std::to_string(expected);
-  if (msg.height > 0 && static_cast<std::uint64_t>(msg.row_step) * msg.height != msg.data.size())
-    return "row_step * height does not match the data size";
+    return "data holds " + std::to_string(msg.data.size()) + " bytes but row_step*height is " + std::to_string(expected);
   for (const char* name : {"x", "y", "z"}) {
     const Field f = find(msg, name);
     if (!f.found) return std::string("field ") + name + " is missing, duplicated or has count != 1";
@@ -79,9 +81,12 @@ void toPcl(const sensor_msgs::PointCloud2& msg, pcl::PointCloud<pcl::PointXYZ>& 
     std::memcpy(&v, p + f.offset, 8);
     return static_cast<float>(v);
   };
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint8_t* p = msg.data.data() + i * msg.point_step;
-    out.points[i] = pcl::PointXYZ(read(p, fx), read(p, fy), read(p, fz));
+  for (std::size_t r = 0, i = 0; r < msg.height; ++r) {
+    const std::uint8_t* row = msg.data.data() + r * static_cast<std::size_t>(msg.row_step);
+    for (std::size_t c = 0; c < msg.width; ++c, ++i) {
+      const std::uint8_t* p = row + c * msg.point_step;
+      out.points[i] = pcl::PointXYZ(read(p, fx), read(p, fy), read(p, fz));
+    }
   }
 }
 

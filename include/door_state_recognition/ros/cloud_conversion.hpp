@@ -13,8 +13,8 @@ namespace ros_io {
 
 // Empty string when the cloud can be read; otherwise what is wrong, one line.
 // Accepts x, y, z as FLOAT32 or FLOAT64, little-endian, COUNT 1, inside
-// point_step, not overlapping; requires width*height*point_step == data.size() (no overflow)
-// and row_step >= width*point_step.
+// point_step, not overlapping; requires row_step >= width*point_step (rows
+// may be padded) and data.size() == row_step*height, with no overflow.
 std::string validate(const sensor_msgs::PointCloud2& msg, std::size_t max_points);
 
 // Converts a cloud that validate() accepted. NaN points are kept.
