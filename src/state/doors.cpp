@@ -25,6 +25,8 @@ constexpr double kOwnLeafCoverage = 0.6;
 constexpr double kBoxSideDeg = 5.0;
 // A door whose leaf was not seen (its angle a lower bound from free space).
 constexpr double kUnseenLeafConfidence = 0.3;
+// A wall whose inliers are more than this share another door's leaf is that leaf.
+constexpr double kLeafWallShare = 0.3;
 
 // f(0) ... f(n - 1) over the cores (OpenMP), each at most once; the first
 // exception thrown is rethrown here (none may escape an OpenMP region).
@@ -135,6 +137,11 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       const bool tall = height >= p.door_min_height && height >= p.door_height_ratio * wall_h - p.door_height_phi;
       const double width = std::abs(leaf.s_latch - leaf.s_hinge);
       const bool wide = width >= p.door_min_width && width <= p.door_max_width;
+      // A "wall" that is mostly the leaf of a door taken before (an open leaf
+      // as tall as the view) holds no doorway of its own.
+      std::size_t on_leaf = 0;
+      for (int i : wall.inliers) on_leaf += out.is_leaf[i];
+      const bool own_wall = on_leaf <= kLeafWallShare * wall.inliers.size();
       {
         char buf[400];
         std::snprintf(buf, sizeof buf,
@@ -144,10 +151,11 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
                       leaf.found, leaf.closed_in_band, leaf.angle_deg, leaf.coverage, leaf.occluders_explained, leaf.hinge_at_s0,
                       leaf.toward_viewer,
                       !evidence ? "rejected: no casing, recess, see-through or own leaf hiding it"
-                                : !tall ? "rejected: too low" : !wide ? "rejected: width" : "door");
+                                : !tall ? "rejected: too low" : !wide ? "rejected: width"
+                                : !own_wall ? "rejected: its wall is another door's leaf" : "door");
         out.trace.push_back(buf);
       }
-      if (!evidence || !tall || !wide) continue;
+      if (!evidence || !tall || !wide || !own_wall) continue;
 
       DoorResult door;
       door.wall_id = static_cast<int>(wi);
