@@ -318,7 +318,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   }
   // 1: trim runs across the doorway above the body; 0: the rows there show
   // wall without trim; -1: nothing is seen there (a camera's view ends lower).
-  constexpr double kHeadSeenFrom = 2.1;  // m above the floor
+  constexpr double kHeadSeenFrom = 2.25;  // m above the floor: above the highest door head with its trim
   auto headState = [&](double a, double b) {
     const int c0 = std::max(0, static_cast<int>((a - s_lo) / cell)), c1 = std::min(cols - 1, static_cast<int>((b - s_lo) / cell));
     bool seen = false;
