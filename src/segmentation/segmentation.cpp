@@ -14,6 +14,12 @@ namespace segmentation {
 // from its fine neighbourhood: a plane with centimetre noise stays far below.
 constexpr float kRefineCurvature = 0.02f;
 
+// Vertical structure this far above a horizontal level (m), in more than
+// 2% of the vertical points (and at least this many), says the level is
+// not the ceiling.
+constexpr double kAboveCeiling = 0.3;
+constexpr std::size_t kAboveCeilingPoints = 50;
+
 Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, const Eigen::Vector3f& viewpoint) {
   Normals out;
   out.n.assign(points.size(), Eigen::Vector3f::Zero());
@@ -149,12 +155,23 @@ FloorCeiling findFloorCeiling(const Points& points, const Normals& normals, cons
     return n ? s / n : z0 + (b + 0.5) * bin;
   };
   const double lo = refine(peaks.front()), hi = refine(peaks.back());
-  if (hi - lo >= p.min_room_height) {
+  // A ceiling closes the room: walls do not rise above it. A horizontal
+  // level with much vertical structure above it is the top of a desk or a
+  // cupboard, or the underside of a shelf, seen by a sensor that does not
+  // see the ceiling (a camera frame rarely does).
+  std::size_t vertical = 0, above = 0;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (std::abs(normals.n[i].z()) < p.vertical_normal_z) {
+      ++vertical;
+      above += points[i].z() > hi + kAboveCeiling;
+    }
+  const bool closes = above < std::max<std::size_t>(kAboveCeilingPoints, vertical / 50);
+  if (hi - lo >= p.min_room_height && closes) {
     fc.floor = lo;
     fc.ceiling = hi;
   } else if (lo < viewpoint_z) {
     fc.floor = lo;  // one horizontal level below the sensor: the floor
-  } else {
+  } else if (closes) {
     fc.ceiling = hi;
   }
   return fc;
