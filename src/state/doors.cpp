@@ -98,7 +98,7 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
     // the doorway makes it a door (the evidence rule below): skip the search
     // when the wall band holds too little for one.
     const recognition::Doorway& d = c.doorway;
-    const bool other_evidence = d.casing || d.through >= 0.08 || d.recess > 0.3;
+    const bool other_evidence = d.casing || d.through >= 0.08 || d.recess > 0.3 || d.set_back > 0;
     c.leaf = fitLeaf(pts, walls[c.wall], d, floor_z, thicknessOf(d), viewpoint, p,
                             other_evidence ? 0.0 : kClosedBandEvidence);
   });
@@ -123,7 +123,10 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       }
       // What tells a door from a cupboard or a gap: a closed leaf inside the
       // wall, or trim around the doorway, or the room beyond seen through it.
-      const bool evidence = leaf.closed_in_band ? (d.casing || d.recess > 0.3 || leaf.coverage > kClosedBandEvidence)
+      // A panel set back from the wall around it must lie off the wall's
+      // plane over a good part of its body too.
+      const bool set_back = d.set_back > 0 && d.recess + d.through >= 0.3;
+      const bool evidence = leaf.closed_in_band ? (d.casing || d.recess > 0.3 || set_back || leaf.coverage > kClosedBandEvidence)
                                                 : (d.casing || d.through >= 0.08);
       // A closed leaf whose foot is hidden by something standing right in
       // front of it is a blocked front, not a door.
@@ -141,9 +144,9 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
         char buf[400];
         std::snprintf(buf, sizeof buf,
                       "wall %zu: doorway s=[%.2f, %.2f] casing=%d face=%.2f through=%.2f front=%.2f recess=%.2f "
-                      "top=%.2f thick=%.2f | leaf found=%d band=%d angle=%.1f cov=%.2f foot=%.2f/%.2f hinge_s0=%d toward=%d | %s",
-                      wi, d.s0, d.s1, d.casing, d.face, d.through, d.front, d.recess, d.top - floor_z, d.thickness,
-                      leaf.found, leaf.closed_in_band, leaf.angle_deg, leaf.coverage, foot.seen, foot.blocked, leaf.hinge_at_s0,
+                      "setback=%.2f top=%.2f thick=%.2f | leaf found=%d band=%d angle=%.1f cov=%.2f foot=%.2f/%.2f hinge_s0=%d toward=%d | %s",
+                      wi, d.s0, d.s1, d.casing, d.face, d.through, d.front, d.recess, d.set_back, d.top - floor_z,
+                      d.thickness, leaf.found, leaf.closed_in_band, leaf.angle_deg, leaf.coverage, foot.seen, foot.blocked, leaf.hinge_at_s0,
                       leaf.toward_viewer,
                       !evidence ? "rejected: no casing, recess or see-through"
                       : !free_foot ? "rejected: foot hidden by something right in front"
