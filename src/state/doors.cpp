@@ -51,7 +51,9 @@ Foot footOf(const segmentation::Points& pts, const segmentation::WallPlane& wall
   if (b <= a) return f;
   const int cols = std::max(1, static_cast<int>((b - a) / 0.05));
   std::vector<char> seen(cols, 0), front(cols, 0);
-  const double d_lo = leaf.face_d - lt - 0.05, d_hi = leaf.face_d + 0.05;
+  // The leaf's depth: its visible face inside the wall band, else at its hinge.
+  const double face = leaf.closed_in_band ? leaf.face_d : wall.signedDistance(Eigen::Vector3f(leaf.hinge.x(), leaf.hinge.y(), 0));
+  const double d_lo = face - lt - 0.05, d_hi = face + lt + 0.05;
   for (const auto& q : pts) {
     if (q.z() >= floor_z + kObjectHeight || q.z() < floor_z + 0.03) continue;
     const double s = wall.along(q);
@@ -128,9 +130,11 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       const bool set_back = d.set_back > 0 && d.recess + d.through >= 0.3;
       const bool evidence = leaf.closed_in_band ? (d.casing || d.recess > 0.3 || set_back || leaf.coverage > kClosedBandEvidence)
                                                 : (d.casing || d.through >= 0.08);
-      // A closed leaf whose foot is hidden by something standing right in
-      // front of it is a blocked front, not a door.
-      const Foot foot = leaf.closed_in_band ? footOf(pts, wall, leaf, floor_z, p.leaf_thickness, p.face_tolerance) : Foot{1, 0};
+      // A closed leaf (found in the wall band or swung by less than
+      // closed_below_deg) whose foot is hidden by something standing right
+      // in front of it is a blocked front, not a door.
+      const bool closed = leaf.closed_in_band || leaf.angle_deg < p.closed_below_deg;
+      const Foot foot = closed ? footOf(pts, wall, leaf, floor_z, p.leaf_thickness, p.face_tolerance) : Foot{1, 0};
       const bool free_foot = foot.seen >= 0.3 || foot.blocked < 0.5;
       const double height = (std::isfinite(d.top) ? d.top : leaf.top_z) - floor_z;
       const double wall_h = top_z - floor_z;
