@@ -20,6 +20,9 @@ constexpr float kRefineCurvature = 0.02f;
 constexpr double kAboveCeiling = 0.3;
 constexpr std::size_t kAboveCeilingPoints = 50;
 
+// cos 15 deg: planes closer to parallel than this may shadow one another.
+constexpr double kNearParallel = 0.966;
+
 Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, const Eigen::Vector3f& viewpoint) {
   Normals out;
   out.n.assign(points.size(), Eigen::Vector3f::Zero());
@@ -221,15 +224,19 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
     const bool tall = h >= p.wall_height_ratio * room_h && w.z_min < floor_z + 0.5;
     const bool reaches_top = !ceiling_known || w.z_max > height_top - 0.25;
     // A plane parallel to a stronger wall and close behind or before it
-    // (a recessed leaf, trim, a cupboard front) is not another wall.
+    // (a recessed leaf, trim, a cupboard front) is not another wall; nor is
+    // one a few degrees off a stronger wall and close to it all along (a
+    // second hypothesis of a noisy face): walls do not meet at such angles.
     bool shadowed = false;
     for (const WallPlane& o : walls) {
-      if (std::abs(o.normal.dot(w.normal)) < 0.995) continue;
+      const double c = std::abs(o.normal.dot(w.normal));
+      if (c < kNearParallel) continue;
       const Eigen::Vector2d a = w.point + w.s_min * w.direction, b = w.point + w.s_max * w.direction;
       const double off = std::abs((0.5 * (a + b) - o.point).dot(o.normal));
+      const double off_ends = std::max(std::abs((a - o.point).dot(o.normal)), std::abs((b - o.point).dot(o.normal)));
       const double s0 = std::min((a - o.point).dot(o.direction), (b - o.point).dot(o.direction));
       const double s1 = std::max((a - o.point).dot(o.direction), (b - o.point).dot(o.direction));
-      shadowed |= off < 0.3 && s0 < o.s_max && s1 > o.s_min;
+      shadowed |= off < 0.3 && (c >= 0.995 || off_ends < 0.5) && s0 < o.s_max && s1 > o.s_min;
     }
     // Without a ceiling to reach, a door leaf is as tall as a wall: then a
     // wall must also be longer than any door.
