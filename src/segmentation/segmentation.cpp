@@ -236,7 +236,9 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
       const double off_ends = std::max(std::abs((a - o.point).dot(o.normal)), std::abs((b - o.point).dot(o.normal)));
       const double s0 = std::min((a - o.point).dot(o.direction), (b - o.point).dot(o.direction));
       const double s1 = std::max((a - o.point).dot(o.direction), (b - o.point).dot(o.direction));
-      shadowed |= off < 0.3 && (c >= 0.995 || off_ends < 0.5) && s0 < o.s_max && s1 > o.s_min;
+      // Off parallel, only along the stronger wall: not a wall meeting it at a shallow corner.
+      const bool along = c >= 0.995 ? s0 < o.s_max && s1 > o.s_min : off_ends < 0.5 && s0 > o.s_min - 0.3 && s1 < o.s_max + 0.3;
+      shadowed |= off < 0.3 && along;
     }
     // Without a ceiling to reach, a door leaf is as tall as a wall: then a
     // wall must also be longer than any door.

@@ -61,7 +61,8 @@ Foot footOf(const segmentation::Points& pts, const segmentation::WallPlane& wall
     const int c = std::min(cols - 1, static_cast<int>((s - a) / 0.05));
     const double d = wall.signedDistance(q);
     if (d >= d_lo && d <= d_hi && q.z() < floor_z + kFootHeight) seen[c] = 1;
-    if (d > std::max(face_tol, d_hi) && d <= kClearance) front[c] = 1;
+    // Standing on the floor: above the floor's own noise.
+    if (d > std::max(face_tol, d_hi) && d <= kClearance && q.z() >= floor_z + 0.1) front[c] = 1;
   }
   int n_seen = 0, n_blocked = 0;
   for (int c = 0; c < cols; ++c) n_seen += seen[c], n_blocked += !seen[c] && front[c];
