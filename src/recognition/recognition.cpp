@@ -137,9 +137,9 @@ std::vector<SetBack> setBackPanels(const Points& points, const segmentation::Wal
     const double h = pt.z() - floor_z;
     const bool in_body = h >= 0.25 && h <= 1.75, in_head = h >= kHead0 && h <= kHead1;
     if (!in_body && !in_head) continue;
-    const int c = static_cast<int>(std::floor((wall.along(pt) - s_lo) / cell));
-    if (c < 0 || c >= cols) continue;
-    (in_body ? body : head)[c].push_back(static_cast<float>(d));
+    const double cf = std::floor((wall.along(pt) - s_lo) / cell);  // tested in double before the cast
+    if (!(cf >= 0 && cf < cols)) continue;
+    (in_body ? body : head)[static_cast<int>(cf)].push_back(static_cast<float>(d));
   }
   // Medians over three columns: the body's and the head's offsets.
   std::vector<float> pool;
