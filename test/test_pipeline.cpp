@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -470,4 +472,58 @@ TEST(Parameters, AbsurdValuesAreRefusedWithTheirName) {
   p.closed_below_deg = 50;
   p.open_from_deg = 40;
   EXPECT_THROW(Pipeline{p}, std::invalid_argument);
+}
+
+// ------------------------------------------------------------------ real data
+
+namespace {
+
+// The shared real scans: env DSR_SHARED_DATA, else the build's
+// DSR_SHARED_DATA_DIR, else <repo>/../shared/data/real (as test_cloud_reader).
+std::filesystem::path sharedDataDir() {
+  if (const char* env = std::getenv("DSR_SHARED_DATA")) return env;
+#ifdef DSR_SHARED_DATA_DIR
+  return DSR_SHARED_DATA_DIR;
+#endif
+  std::filesystem::path repo = std::filesystem::path(__FILE__).parent_path().parent_path();  // <repo>/test/this.cpp
+  if (repo.empty()) repo = ".";
+  return repo / ".." / "shared" / "data" / "real";
+}
+
+}  // namespace
+
+// office1.pcd (PCL's test data; Kinect, optical frame, no ceiling in view):
+// an office wall about 5 m away with ONE closed door (white leaf in a
+// wooden casing, set about 0.15 m back from the wall's face), tall white
+// built-in cupboards to the right (one of them a door-sized white front set
+// back 0.24 m from its neighbours, with a box standing against its foot),
+// a desk and a chair. Exactly the door must be found, closed; the cupboards
+// are not doors, and the desk and cupboard tops are no ceiling. The door's
+// place, from the cloud's own points (the leaf spans x -0.55 .. 0.42 at
+// z 5.05 .. 5.2, its foot at y 1.38): centre about (-0.07, 5.1) on the floor.
+TEST(RealScan, Office1HasOneClosedDoorAndTheCupboardsAreNot) {
+  const std::filesystem::path path = sharedDataDir() / "office1.pcd";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " not found (set DSR_SHARED_DATA)";
+  const pcl::PointCloud<pcl::PointXYZ> cloud = io::readCloud(path.string());
+  for (const std::string up : {"-y", "auto"}) {
+    SCOPED_TRACE("up " + up);
+    Parameters p;
+    p.up_axis = up;
+    const PipelineResult r = Pipeline(p).run(cloud, false);
+    std::string why;
+    for (const auto& t : r.trace) why += "\n  " + t;
+    EXPECT_FALSE(r.ceiling.has_value()) << "ceiling at " << *r.ceiling << why;
+    ASSERT_EQ(r.doors.size(), 1u) << why;
+    const DoorResult& d = r.doors[0];
+    EXPECT_EQ(d.state, DoorStateKind::Closed) << why;
+    EXPECT_LT(d.opening_angle_deg, p.closed_below_deg);
+    EXPECT_NEAR(d.opening_center.x(), -0.07, 0.25) << why;
+    EXPECT_NEAR(d.opening_center.z(), 5.1, 0.25) << why;
+    EXPECT_NEAR(d.opening_center.y(), 1.38, 0.1) << "not on the floor" << why;
+    EXPECT_GT(d.width, 0.75);
+    EXPECT_LT(d.width, 1.15);
+    EXPECT_GT(d.height, 1.9);
+    EXPECT_LT(d.height, 2.3);
+    EXPECT_GT(r.up.dot(Eigen::Vector3d(0, -1, 0)), 0.99);
+  }
 }

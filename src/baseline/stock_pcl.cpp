@@ -289,7 +289,7 @@ PipelineResult runStockPcl(const Cloud& cloud_in, const Parameters& p, const Sto
   const Eigen::Matrix3d Rt = R.transpose();
   auto toInput = [&](const Eigen::Vector3d& v) -> Eigen::Vector3d { return Rt * v; };
   auto onFloor = [&](const Eigen::Vector2d& xy) { return Eigen::Vector3d(xy.x(), xy.y(), floor_z); };
-  state::DoorStage door_stage = state::findDoors(pts, walls, floor_z, top_z, viewpoint, Rt, organized, p);
+  state::DoorStage door_stage = state::findDoors(pts, walls, floor_z, top_z, res.ceiling.has_value(), viewpoint, Rt, organized, p);
   res.doors = std::move(door_stage.doors);
   const std::vector<char>& is_leaf = door_stage.is_leaf;
   std::vector<char> is_wall(n, 0);

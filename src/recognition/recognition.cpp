@@ -111,6 +111,83 @@ double thicknessFrom(std::vector<double> depth, double start) {
   return last;
 }
 
+// (3) of findDoorways: panels set back from the wall around them. Where a
+// face is noisy at the scale of a door's recess (a depth camera at range:
+// depth steps of several centimetres, and a face that bends by as much),
+// the face is read column by column against the same column's wall above
+// a door's head: a run of columns a door wide whose body lies at least
+// max(0.1 m, 2 tolerances) behind it, with the wall level again beside it
+// on both sides, is a doorway with its leaf (or nothing) set back. Returns
+// (s0, s1, depth) of each run. Needs the wall seen above a door's head.
+struct SetBack {
+  double s0, s1, depth;
+};
+std::vector<SetBack> setBackPanels(const Points& points, const segmentation::WallPlane& wall, double floor_z,
+                                   double top_z, double d_view, double s_lo, double cell,
+                                   const std::vector<double>& col_tol, const Parameters& p) {
+  constexpr double kHead0 = 2.3, kReach = 0.5;
+  // Below the ceiling (or the top of what was seen) and its points.
+  const double kHead1 = std::min(2.8, top_z - floor_z - 0.1);
+  const int cols = static_cast<int>(col_tol.size());
+  if (kHead1 < kHead0 + 0.1 || cols < 3) return {};
+  std::vector<std::vector<float>> body(cols), head(cols);
+  for (const auto& pt : points) {
+    const double d = wall.signedDistance(pt);
+    if (d < -kReach || d > kReach || d >= d_view) continue;
+    const double h = pt.z() - floor_z;
+    const bool in_body = h >= 0.25 && h <= 1.75, in_head = h >= kHead0 && h <= kHead1;
+    if (!in_body && !in_head) continue;
+    const double cf = std::floor((wall.along(pt) - s_lo) / cell);  // tested in double before the cast
+    if (!(cf >= 0 && cf < cols)) continue;
+    (in_body ? body : head)[static_cast<int>(cf)].push_back(static_cast<float>(d));
+  }
+  // Medians over three columns: the body's and the head's offsets.
+  std::vector<float> pool;
+  auto median3 = [&](const std::vector<std::vector<float>>& v, int c, double& out) {
+    pool.clear();
+    for (int k = std::max(0, c - 1); k <= std::min(cols - 1, c + 1); ++k) pool.insert(pool.end(), v[k].begin(), v[k].end());
+    if (pool.size() < 8) return false;
+    std::nth_element(pool.begin(), pool.begin() + pool.size() / 2, pool.end());
+    out = pool[pool.size() / 2];
+    return true;
+  };
+  std::vector<int> state(cols, 0);  // 1 set back, -1 level with the wall above, 0 unknown
+  std::vector<double> depth(cols, 0.0);
+  for (int c = 0; c < cols; ++c) {
+    double b = 0, h = 0;
+    if (!median3(body, c, b) || !median3(head, c, h)) continue;
+    const double delta = std::max(0.1, 2 * col_tol[c]);
+    depth[c] = h - b;
+    state[c] = depth[c] >= delta ? 1 : std::abs(depth[c]) < delta / 2 ? -1 : 0;
+  }
+  std::vector<SetBack> out;
+  const int beside = std::max(1, static_cast<int>(0.2 / cell));
+  for (int c = 0; c < cols;) {
+    if (state[c] != 1) {
+      ++c;
+      continue;
+    }
+    int e = c;
+    while (e + 1 < cols && (state[e + 1] == 1 || (e + 2 < cols && state[e + 1] == 0 && state[e + 2] == 1))) ++e;
+    auto levelNear = [&](int from, int step) {
+      for (int k = 1; k <= beside; ++k) {
+        const int j = from + step * k;
+        if (j < 0 || j >= cols) return false;
+        if (state[j] == -1) return true;
+      }
+      return false;
+    };
+    const double s0 = s_lo + c * cell, s1 = s_lo + (e + 1) * cell;
+    if (s1 - s0 >= p.door_min_width - 0.1 && s1 - s0 <= p.door_max_width + 0.1 && levelNear(c, -1) && levelNear(e, 1)) {
+      std::vector<double> dd(depth.begin() + c, depth.begin() + e + 1);
+      std::nth_element(dd.begin(), dd.begin() + dd.size() / 2, dd.end());
+      out.push_back({s0, s1, dd[dd.size() / 2]});
+    }
+    c = e + 1;
+  }
+  return out;
+}
+
 }  // namespace
 
 std::vector<Doorway> findDoorways(const Points& points, const segmentation::WallPlane& wall, double floor_z,
@@ -409,7 +486,15 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     c = e + 1;
   }
 
-  // (3) A leaf set back in its doorway, seen through depth noise that puts
+  // (3) Panels set back from a noisy face (see setBackPanels), first: a
+  // run of (4) overlapping one of them merges into it.
+  for (const SetBack& sb : setBackPanels(points, wall, floor_z, top_z, d_view, s_lo, cell, col_tol, p)) {
+    const std::size_t before = out.size();
+    addCandidate(sb.s0, sb.s1, false);
+    if (out.size() > before) out.back().set_back = sb.depth;
+  }
+
+  // (4) A leaf set back in its doorway, seen through depth noise that puts
   // it within the wall's face tolerance (a depth camera a few metres off):
   // runs of sub-columns whose face points lie, on average, kSetBack or more
   // behind the face (the mean of a hundred points is sharp where single

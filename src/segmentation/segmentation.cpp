@@ -15,6 +15,15 @@ namespace segmentation {
 // from its fine neighbourhood: a plane with centimetre noise stays far below.
 constexpr float kRefineCurvature = 0.02f;
 
+// Vertical structure this far above a horizontal level (m), in more than
+// 2% of the vertical points (and at least this many), says the level is
+// not the ceiling.
+constexpr double kAboveCeiling = 0.3;
+constexpr std::size_t kAboveCeilingPoints = 50;
+
+// cos 15 deg: planes closer to parallel than this may shadow one another.
+constexpr double kNearParallel = 0.966;
+
 Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, const Eigen::Vector3f& viewpoint) {
   Normals out;
   out.n.assign(points.size(), Eigen::Vector3f::Zero());
@@ -150,12 +159,23 @@ FloorCeiling findFloorCeiling(const Points& points, const Normals& normals, cons
     return n ? s / n : z0 + (b + 0.5) * bin;
   };
   const double lo = refine(peaks.front()), hi = refine(peaks.back());
-  if (hi - lo >= p.min_room_height) {
+  // A ceiling closes the room: walls do not rise above it. A horizontal
+  // level with much vertical structure above it is the top of a desk or a
+  // cupboard, or the underside of a shelf, seen by a sensor that does not
+  // see the ceiling (a camera frame rarely does).
+  std::size_t vertical = 0, above = 0;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (std::abs(normals.n[i].z()) < p.vertical_normal_z) {
+      ++vertical;
+      above += points[i].z() > hi + kAboveCeiling;
+    }
+  const bool closes = above < std::max<std::size_t>(kAboveCeilingPoints, vertical / 50);
+  if (hi - lo >= p.min_room_height && closes) {
     fc.floor = lo;
     fc.ceiling = hi;
   } else if (lo < viewpoint_z) {
     fc.floor = lo;  // one horizontal level below the sensor: the floor
-  } else {
+  } else if (closes) {
     fc.ceiling = hi;
   }
   return fc;
@@ -269,15 +289,21 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
     // (cut by the view) as high as a door at least.
     const bool tall = (h >= p.wall_height_ratio * room_h || (cut && h >= p.door_min_height)) && w.z_min < floor_z + 0.5;
     // A plane parallel to a stronger wall and close behind or before it
-    // (a recessed leaf, trim, a cupboard front) is not another wall.
+    // (a recessed leaf, trim, a cupboard front) is not another wall; nor is
+    // one a few degrees off a stronger wall and close to it all along (a
+    // second hypothesis of a noisy face): walls do not meet at such angles.
     bool shadowed = false;
     for (const WallPlane& o : walls) {
-      if (std::abs(o.normal.dot(w.normal)) < 0.995) continue;
+      const double c = std::abs(o.normal.dot(w.normal));
+      if (c < kNearParallel) continue;
       const Eigen::Vector2d a = w.point + w.s_min * w.direction, b = w.point + w.s_max * w.direction;
       const double off = std::abs((0.5 * (a + b) - o.point).dot(o.normal));
+      const double off_ends = std::max(std::abs((a - o.point).dot(o.normal)), std::abs((b - o.point).dot(o.normal)));
       const double s0 = std::min((a - o.point).dot(o.direction), (b - o.point).dot(o.direction));
       const double s1 = std::max((a - o.point).dot(o.direction), (b - o.point).dot(o.direction));
-      shadowed |= off < 0.3 && s0 < o.s_max && s1 > o.s_min;
+      // Off parallel, only along the stronger wall: not a wall meeting it at a shallow corner.
+      const bool along = c >= 0.995 ? s0 < o.s_max && s1 > o.s_min : off_ends < 0.5 && s0 > o.s_min - 0.3 && s1 < o.s_max + 0.3;
+      shadowed |= off < 0.3 && along;
     }
     // Without a ceiling to reach, a door leaf is as tall as a wall: then a
     // wall must also be longer than any door.

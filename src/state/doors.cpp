@@ -45,11 +45,48 @@ void parallelFor(std::size_t n, F f) {
   if (error) std::rethrow_exception(error);
 }
 
+// The foot of a closed leaf, over its width in 5 cm columns: `seen` the
+// share where points at the leaf's depth lie within kFootHeight of the
+// floor; `blocked` the share where, with the leaf unseen there, something
+// stands on the floor right in front of the wall (within kClearance). A
+// door stands on the floor and is kept clear; a cupboard front stands on a
+// plinth, and boxes are put in front of it.
+constexpr double kFootHeight = 0.3, kClearance = 0.4, kObjectHeight = 0.5;
+struct Foot {
+  double seen = 0, blocked = 0;
+};
+Foot footOf(const segmentation::Points& pts, const segmentation::WallPlane& wall, const LeafFit& leaf, double floor_z,
+            double lt, double face_tol) {
+  Foot f;
+  const double a = std::min(leaf.s_hinge, leaf.s_latch) + 0.03, b = std::max(leaf.s_hinge, leaf.s_latch) - 0.03;
+  if (b <= a) return f;
+  const int cols = std::max(1, static_cast<int>((b - a) / 0.05));
+  std::vector<char> seen(cols, 0), front(cols, 0);
+  // The leaf's depth: its visible face inside the wall band, else at its hinge.
+  const double face = leaf.closed_in_band ? leaf.face_d : wall.signedDistance(Eigen::Vector3f(leaf.hinge.x(), leaf.hinge.y(), 0));
+  const double d_lo = face - lt - 0.05, d_hi = face + lt + 0.05;
+  for (const auto& q : pts) {
+    if (q.z() >= floor_z + kObjectHeight || q.z() < floor_z + 0.03) continue;
+    const double s = wall.along(q);
+    if (s <= a || s >= b) continue;
+    const int c = std::min(cols - 1, static_cast<int>((s - a) / 0.05));
+    const double d = wall.signedDistance(q);
+    if (d >= d_lo && d <= d_hi && q.z() < floor_z + kFootHeight) seen[c] = 1;
+    // Standing on the floor: above the floor's own noise.
+    if (d > std::max(face_tol, d_hi) && d <= kClearance && q.z() >= floor_z + 0.1) front[c] = 1;
+  }
+  int n_seen = 0, n_blocked = 0;
+  for (int c = 0; c < cols; ++c) n_seen += seen[c], n_blocked += !seen[c] && front[c];
+  f.seen = static_cast<double>(n_seen) / cols;
+  f.blocked = static_cast<double>(n_blocked) / cols;
+  return f;
+}
+
 }  // namespace
 
 DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentation::WallPlane>& walls, double floor_z,
-                    double top_z, const Eigen::Vector3f& viewpoint, const Eigen::Matrix3d& to_input, bool organized,
-                    const Parameters& p) {
+                    double top_z, bool ceiling_known, const Eigen::Vector3f& viewpoint, const Eigen::Matrix3d& to_input,
+                    bool organized, const Parameters& p) {
   DoorStage out;
   auto toInput = [&](const Eigen::Vector3d& v) -> Eigen::Vector3d { return to_input * v; };
   auto onFloor = [&](const Eigen::Vector2d& xy) { return Eigen::Vector3d(xy.x(), xy.y(), floor_z); };
@@ -80,7 +117,8 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
     const recognition::Doorway& d = c.doorway;
     // A doorway hidden by what stands in front of it may be hidden by its own
     // leaf swung towards the sensor: searched too (see the evidence rule).
-    const bool other_evidence = d.casing || d.through >= 0.08 || d.recess > 0.3 || d.front >= kOwnLeafFront;
+    const bool other_evidence =
+        d.casing || d.through >= 0.08 || d.recess > 0.3 || d.set_back > 0 || d.front >= kOwnLeafFront;
     c.leaf = fitLeaf(pts, walls[c.wall], d, floor_z, thicknessOf(d), viewpoint, p,
                             other_evidence ? 0.0 : kClosedBandEvidence, organized ? &view : nullptr);
   });
@@ -96,7 +134,7 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       const bool open_unseen = !leaf.found && std::isfinite(leaf.free_from_deg) && leaf.free_from_deg >= p.open_from_deg &&
                                leaf.free_from_deg <= 170;
       if (!leaf.found) {
-        char buf[400];
+        char buf[512];
         std::snprintf(buf, sizeof buf,
                       "wall %zu: doorway s=[%.2f, %.2f] casing=%d through=%.2f front=%.2f recess=%.2f top=%.2f "
                       "thick=%.2f | no leaf (%s: %.0f deg, coverage %.2f, contradicted %.2f; %d points, %d rays; "
@@ -130,11 +168,24 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       const bool own_leaf_hides = !leaf.closed_in_band && leaf.toward_viewer && d.front >= kOwnLeafFront &&
                                   leaf.coverage >= kOwnLeafCoverage && leaf.occluders_explained >= kOwnLeafExplained &&
                                   std::abs(leaf.angle_deg - 90) >= kBoxSideDeg;
-      const bool evidence = leaf.closed_in_band ? (d.casing || d.recess > 0.3 || leaf.coverage > kClosedBandEvidence)
-                                                : (d.casing || d.through >= 0.08 || own_leaf_hides);
+      // A panel set back from the wall around it must lie off the wall's
+      // plane over a good part of its body too.
+      const bool set_back = d.set_back > 0 && d.recess + d.through >= 0.3;
+      const bool evidence = leaf.closed_in_band
+                                ? (d.casing || d.recess > 0.3 || set_back || leaf.coverage > kClosedBandEvidence)
+                                : (d.casing || d.through >= 0.08 || own_leaf_hides);
+      // A closed leaf (found in the wall band or swung by less than
+      // closed_below_deg) whose foot is hidden by something standing right
+      // in front of it is a blocked front, not a door.
+      const bool closed = leaf.closed_in_band || leaf.angle_deg < p.closed_below_deg;
+      const Foot foot = closed ? footOf(pts, wall, leaf, floor_z, p.leaf_thickness, p.face_tolerance) : Foot{1, 0};
+      const bool free_foot = foot.seen >= 0.3 || foot.blocked < 0.5;
       const double height = (std::isfinite(d.top) ? d.top : leaf.top_z) - floor_z;
       const double wall_h = top_z - floor_z;
-      const bool tall = height >= p.door_min_height && height >= p.door_height_ratio * wall_h - p.door_height_phi;
+      // The paper's ratio to the room's height needs the ceiling: without it
+      // the top of what was seen is where the view ends, not the room.
+      const bool tall = height >= p.door_min_height &&
+                        (!ceiling_known || height >= p.door_height_ratio * wall_h - p.door_height_phi);
       const double width = std::abs(leaf.s_latch - leaf.s_hinge);
       const bool wide = width >= p.door_min_width && width <= p.door_max_width;
       // A "wall" that is mostly the leaf of a door taken before (an open leaf
@@ -143,19 +194,21 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       for (int i : wall.inliers) on_leaf += out.is_leaf[i];
       const bool own_wall = on_leaf <= kLeafWallShare * wall.inliers.size();
       {
-        char buf[400];
+        char buf[512];
         std::snprintf(buf, sizeof buf,
                       "wall %zu: doorway s=[%.2f, %.2f] casing=%d face=%.2f through=%.2f front=%.2f recess=%.2f "
-                      "top=%.2f thick=%.2f | leaf found=%d band=%d angle=%.1f cov=%.2f explains=%.2f hinge_s0=%d toward=%d | %s",
-                      wi, d.s0, d.s1, d.casing, d.face, d.through, d.front, d.recess, d.top - floor_z, d.thickness,
-                      leaf.found, leaf.closed_in_band, leaf.angle_deg, leaf.coverage, leaf.occluders_explained, leaf.hinge_at_s0,
-                      leaf.toward_viewer,
+                      "setback=%.2f top=%.2f thick=%.2f | leaf found=%d band=%d angle=%.1f cov=%.2f explains=%.2f "
+                      "foot=%.2f/%.2f hinge_s0=%d toward=%d | %s",
+                      wi, d.s0, d.s1, d.casing, d.face, d.through, d.front, d.recess, d.set_back, d.top - floor_z,
+                      d.thickness, leaf.found, leaf.closed_in_band, leaf.angle_deg, leaf.coverage, leaf.occluders_explained,
+                      foot.seen, foot.blocked, leaf.hinge_at_s0, leaf.toward_viewer,
                       !evidence ? "rejected: no casing, recess, see-through or own leaf hiding it"
-                                : !tall ? "rejected: too low" : !wide ? "rejected: width"
-                                : !own_wall ? "rejected: its wall is another door's leaf" : "door");
+                      : !free_foot ? "rejected: foot hidden by something right in front"
+                      : !tall ? "rejected: too low" : !wide ? "rejected: width"
+                      : !own_wall ? "rejected: its wall is another door's leaf" : "door");
         out.trace.push_back(buf);
       }
-      if (!evidence || !tall || !wide || !own_wall) continue;
+      if (!evidence || !free_foot || !tall || !wide || !own_wall) continue;
 
       DoorResult door;
       door.wall_id = static_cast<int>(wi);

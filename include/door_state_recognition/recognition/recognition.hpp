@@ -43,6 +43,7 @@ struct Doorway {
   bool paired = false;     // both legs found: the jambs s0, s1 are exact
   double face = 0, through = 0, front = 0, recess = 0;  // shares of body cells, see findDoorways
   double thickness = 0;    // wall thickness seen at the jambs (0: unknown)
+  double set_back = 0;     // found as a panel this far behind the wall above and beside it (0: not so found)
   double width() const { return s1 - s0; }
 };
 
@@ -53,7 +54,10 @@ struct Doorway {
 // whose body (0.25-1.75 m above the floor) shows no face but through, recess
 // or occlusion form openings; pairs of trim legs (face points standing out by
 // casing_min_offset) form doorways even when a closed leaf is flush with the
-// wall. Candidates are door_min_width..door_max_width wide.
+// wall. Where the face is too noisy for either (a depth camera at range),
+// runs of columns whose body lies well behind the same columns' wall above
+// a door's head, level with it again on both sides, form doorways too
+// (set_back). Candidates are door_min_width..door_max_width wide.
 // no_return_is_free: the cloud is an organized camera frame, where a body
 // cell of a doorway without any return means nothing was there in range
 // (counted as seen through).

@@ -39,6 +39,9 @@ struct FloorCeiling {
 // Peaks of the z histogram of horizontal-surface points: the lowest is the
 // floor, the highest the ceiling (when they are at least min_room_height
 // apart). A single peak is the floor when it lies below the viewpoint.
+// A level that walls rise well above (more than 2% of the vertical points
+// 0.3 m or more higher) is no ceiling: a desk or cupboard top, a shelf's
+// underside, seen by a sensor that does not see the ceiling.
 FloorCeiling findFloorCeiling(const Points& points, const Normals& normals, const Parameters& p, double viewpoint_z);
 
 struct WallPlane {
