@@ -63,8 +63,18 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   // A leaf may be longer than the doorway seen (a leaf ajar hides its own
   // doorway): hypotheses reach up to the widest door from either jamb.
   const double Lmax = door.paired ? L + 0.05 : std::max(L, p.door_max_width), reach_h = Lmax + 0.15;
+  // std::hypot(x, y) <= reach_h, calling hypot only where the squares are too close to tell.
+  const double reach_h2 = reach_h * reach_h;
+  auto withinReach = [&](double x, double y) {
+    if (std::abs(x) > reach_h) return false;  // hypot(x, y) >= |x|
+    const double r2 = x * x + y * y;
+    if (r2 < reach_h2 * (1 - 1e-9)) return true;
+    if (r2 > reach_h2 * (1 + 1e-9)) return false;
+    return std::hypot(x, y) <= reach_h;
+  };
   auto nearJamb = [&](double s, double d) {
-    return std::hypot(s - door.s0, d + t / 2) <= reach_h || std::hypot(s - door.s1, d + t / 2) <= reach_h;
+    if (std::abs(d + t / 2) > reach_h) return false;
+    return withinReach(s - door.s0, d + t / 2) || withinReach(s - door.s1, d + t / 2);
   };
 
   std::vector<Local> pts, band;
@@ -131,8 +141,6 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   // With both trim legs seen the leaf spans the doorway; otherwise its length is sought.
   const int na_min = door.paired ? std::max(1, na - 1)
                                  : std::min(na, std::max(1, static_cast<int>(std::floor((p.door_min_width - 0.05) / abin))));
-  std::vector<char> seen(static_cast<std::size_t>(na_max) * nz), blocked(seen.size());
-  std::vector<int> sup(na_max), con(na_max);
   struct Score {
     double score = -1e9;
     int cells = 0, contra = 0, bins = 0;
@@ -141,51 +149,65 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   // swing side m, angle th. Support (cells holding points) against
   // contradiction (cells rays went through), with the best leaf length: the
   // shortest reaching the largest sum of support minus twice contradiction.
-  // Which points and rays can touch a leaf at each angle of a set: for one
-  // hinge and swing, a point lies within the leaf's band only for angles
-  // near its own bearing from the hinge, and a ray crosses the leaf only for
-  // angles within the arc its chord subtends. Bucketing them by angle once
-  // per hinge makes each hypothesis test only what can touch it (the exact
-  // test below is unchanged, so the result is the same as testing all).
-  struct AngleIndex {
-    double start = 0, step = 1;
-    int count = 0;
-    std::vector<std::vector<int>> pts, rays;
-  } index;
+  // The angles of one hinge and swing are scored together: a point lies
+  // within the leaf's band only for angles near its own bearing from the
+  // hinge, and a ray crosses the leaf only for angles within the arc its
+  // chord subtends, so each point and ray is tested (exactly, below) only at
+  // the angles of its arc, widened by kBearingSlackDeg; the result is the
+  // same as testing every point and ray at every angle.
   const double band_hw = lt + tol;  // farthest a supporting point lies off the hinge line
   const double r_pts = std::hypot(Lmax, band_hw), r_rays = std::hypot(Lmax, lt / 2);
-  auto addArc = [&](std::vector<std::vector<int>>& buckets, int id, double lo, double hi) {
-    // Every angle start + i step within [lo, hi] degrees, modulo 360.
-    for (double shift = -360; shift <= 360; shift += 360) {
-      const double a = lo + shift, b = hi + shift;
-      const int i0 = std::max(0, static_cast<int>(std::ceil((a - index.start) / index.step - 1e-9)));
-      const int i1 = std::min(index.count - 1, static_cast<int>(std::floor((b - index.start) / index.step + 1e-9)));
-      for (int i = i0; i <= i1; ++i) buckets[i].push_back(id);
-    }
-  };
-  auto buildIndex = [&](double s_h, double d_h, double e0, double m, double start_deg, double step_deg, int count) {
-    index.start = start_deg;
-    index.step = step_deg;
-    index.count = count;
-    index.pts.resize(count);
-    index.rays.resize(count);
-    for (auto& b : index.pts) b.clear();
-    for (auto& b : index.rays) b.clear();
+  const std::size_t cells = static_cast<std::size_t>(na_max) * nz;
+  std::vector<char> seen, blocked;  // per angle: leaf bin x z bin
+  std::vector<int> sup, con;        // per angle: leaf bin
+  std::vector<Eigen::Vector2d> E, K, P;
+  std::vector<Score> scores;
+  auto scoreAngles = [&](double s_h, double d_h, double e0, double m, double start, double step, int count) {
+    seen.assign(count * cells, 0);
+    blocked.assign(count * cells, 0);
+    sup.assign(static_cast<std::size_t>(count) * na_max, 0);
+    con.assign(static_cast<std::size_t>(count) * na_max, 0);
+    E.resize(count);
+    K.resize(count);
+    P.resize(count);
     const Eigen::Vector2d H(s_h, d_h);
+    for (int ai = 0; ai < count; ++ai) {
+      const double th = (start + ai * step) * M_PI / 180;
+      E[ai] = Eigen::Vector2d(std::cos(th) * e0, std::sin(th) * m);
+      K[ai] = Eigen::Vector2d(std::sin(th) * e0, -std::cos(th) * m);
+      P[ai] = H + K[ai] * (lt / 2);  // the leaf's mid-plane
+    }
+    const double end = start + (count - 1) * step;
+    // f(i) for every angle start + i step within [lo, hi] degrees, modulo 360.
+    auto forArc = [&](double lo, double hi, auto&& f) {
+      for (double shift = -360; shift <= 360; shift += 360) {
+        const double a = lo + shift, b = hi + shift;
+        if (b < start - step || a > end + step) continue;  // no angle of the run
+        const int i0 = std::max(0, static_cast<int>(std::ceil((a - start) / step - 1e-9)));
+        const int i1 = std::min(count - 1, static_cast<int>(std::floor((b - start) / step + 1e-9)));
+        for (int i = i0; i <= i1; ++i) f(i);
+      }
+    };
     auto bearing = [&](const Eigen::Vector2d& r) { return fastAtan2Deg(m * r.y(), e0 * r.x()); };
-    for (std::size_t j = 0; j < pts.size(); ++j) {
-      const Eigen::Vector2d r(pts[j].s - s_h, pts[j].d - d_h);
+    for (const Local& q : pts) {
+      const Eigen::Vector2d r(q.s - s_h, q.d - d_h);
       const double rho = r.norm();
       if (rho > r_pts) continue;
+      auto test = [&](int ai) {
+        const double a = r.dot(E[ai]), b = r.dot(K[ai]);
+        if (a < 0.02 || a >= Lmax || b < -tol || b > lt + tol) return;
+        const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
+        char& f = seen[ai * cells + static_cast<std::size_t>(ab) * nz + q.zbin];
+        if (!f) f = 1, ++sup[static_cast<std::size_t>(ai) * na_max + ab];
+      };
       if (rho <= band_hw) {
-        addArc(index.pts, static_cast<int>(j), -360, 360);
+        for (int ai = 0; ai < count; ++ai) test(ai);
         continue;
       }
       const double c = bearing(r), dl = std::asin(band_hw / rho) * 180 / M_PI + kBearingSlackDeg;
-      addArc(index.pts, static_cast<int>(j), c - dl, c + dl);
+      forArc(c - dl, c + dl, test);
     }
-    for (std::size_t j = 0; j < rays.size(); ++j) {
-      const Ray& ray = rays[j];
+    for (const Ray& ray : rays) {
       // The part of the ray that counts: from the sensor to 6 cm before its point.
       const Eigen::Vector2d A = ray.v, B = ray.q - (0.06 / ray.len) * (ray.q - ray.v);
       const Eigen::Vector2d u = B - A, w0 = A - H;
@@ -197,62 +219,50 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       const double sq = std::sqrt(disc);
       const double t0 = std::max(0.0, (-bq - sq) / uu), t1 = std::min(1.0, (-bq + sq) / uu);
       if (t0 >= t1) continue;
+      // Every crossing with a leaf lies on that chord: a ray passing above or
+      // below the leaf's heights there crosses none (1 mm spares rounding).
+      const double lam_max = 1 - 0.06 / ray.len, dz = ray.qz - ray.vz;
+      const double za = ray.vz + t0 * lam_max * dz, zb = ray.vz + t1 * lam_max * dz;
+      if (std::max(za, zb) < z0 - 1e-3 || std::min(za, zb) >= z1 + 1e-3) continue;
+      const Eigen::Vector2d r = ray.q - ray.v;
+      auto test = [&](int ai) {
+        const Eigen::Vector2d& e = E[ai];
+        const double denom = r.x() * e.y() - r.y() * e.x();
+        if (std::abs(denom) < 1e-9) return;
+        const Eigen::Vector2d wp = P[ai] - ray.v;
+        const double lam = (wp.x() * e.y() - wp.y() * e.x()) / denom;
+        const double a = (wp.x() * r.y() - wp.y() * r.x()) / denom;
+        if (a < 0.05 || a >= Lmax || lam <= 0 || lam > lam_max) return;
+        const double z = ray.vz + lam * dz;
+        if (z < z0 || z >= z1) return;
+        const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
+        char& f = blocked[ai * cells + static_cast<std::size_t>(ab) * nz + std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
+        if (!f) f = 1, ++con[static_cast<std::size_t>(ai) * na_max + ab];
+      };
       const double tc = std::clamp(-bq / uu, t0, t1);
       const double rho_min = (w0 + tc * u).norm();
       if (rho_min <= std::max(0.05, lt / 2)) {
-        addArc(index.rays, static_cast<int>(j), -360, 360);
+        for (int ai = 0; ai < count; ++ai) test(ai);
         continue;
       }
       const double c0 = bearing(w0 + t0 * u), c1 = bearing(w0 + t1 * u);
       const double span = std::remainder(c1 - c0, 360.0);
       const double lo = c0 + std::min(0.0, span), hi = lo + std::abs(span);
       const double dl = std::asin(std::min(1.0, lt / 2 / rho_min)) * 180 / M_PI + kBearingSlackDeg;
-      addArc(index.rays, static_cast<int>(j), lo - dl, hi + dl);
+      forArc(lo - dl, hi + dl, test);
     }
-  };
-  // One hypothesis, at angle number ai of the index built for its hinge.
-  auto evaluate = [&](double s_h, double d_h, double e0, double m, int ai) {
-    const double th = (index.start + ai * index.step) * M_PI / 180;
-    const Eigen::Vector2d H(s_h, d_h);
-    const Eigen::Vector2d e(std::cos(th) * e0, std::sin(th) * m), k(std::sin(th) * e0, -std::cos(th) * m);
-    std::fill(seen.begin(), seen.end(), 0);
-    std::fill(blocked.begin(), blocked.end(), 0);
-    std::fill(sup.begin(), sup.end(), 0);
-    std::fill(con.begin(), con.end(), 0);
-    for (int j : index.pts[ai]) {
-      const Local& q = pts[j];
-      const Eigen::Vector2d r(q.s - s_h, q.d - d_h);
-      const double a = r.dot(e), b = r.dot(k);
-      if (a < 0.02 || a >= Lmax || b < -tol || b > lt + tol) continue;
-      const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
-      char& f = seen[static_cast<std::size_t>(ab) * nz + q.zbin];
-      if (!f) f = 1, ++sup[ab];
+    scores.assign(count, Score());
+    for (int ai = 0; ai < count; ++ai) {
+      Score& out = scores[ai];
+      int acc = 0, cells_seen = 0, contra = 0;
+      for (int i = 0; i < na_max; ++i) {
+        const std::size_t j = static_cast<std::size_t>(ai) * na_max + i;
+        acc += sup[j] - 2 * con[j];
+        cells_seen += sup[j];
+        contra += con[j];
+        if (i + 1 >= na_min && acc > out.score) out = {static_cast<double>(acc), cells_seen, contra, i + 1};
+      }
     }
-    const Eigen::Vector2d P = H + k * (lt / 2);  // the leaf's mid-plane
-    for (int j : index.rays[ai]) {
-      const Ray& ray = rays[j];
-      const Eigen::Vector2d r = ray.q - ray.v;
-      const double denom = r.x() * e.y() - r.y() * e.x();
-      if (std::abs(denom) < 1e-9) continue;
-      const Eigen::Vector2d w0 = P - ray.v;
-      const double lam = (w0.x() * e.y() - w0.y() * e.x()) / denom;
-      const double a = (w0.x() * r.y() - w0.y() * r.x()) / denom;
-      if (a < 0.05 || a >= Lmax || lam <= 0 || lam > 1 - 0.06 / ray.len) continue;
-      const double z = ray.vz + lam * (ray.qz - ray.vz);
-      if (z < z0 || z >= z1) continue;
-      const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
-      char& f = blocked[static_cast<std::size_t>(ab) * nz + std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
-      if (!f) f = 1, ++con[ab];
-    }
-    Score out;
-    int acc = 0, cells = 0, contra = 0;
-    for (int i = 0; i < na_max; ++i) {
-      acc += sup[i] - 2 * con[i];
-      cells += sup[i];
-      contra += con[i];
-      if (i + 1 >= na_min && acc > out.score) out = {static_cast<double>(acc), cells, contra, i + 1};
-    }
-    return out;
   };
 
   // Global search: hinge at either jamb, either swing side, hinge on the
@@ -269,9 +279,9 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
         const double s_h = h == 0 ? door.s0 : door.s1, e0 = h == 0 ? 1.0 : -1.0;
         const double m = sw == 0 ? 1.0 : -1.0, d_h = sw == 0 ? -rec : -t + rec;
         // Beyond 170 deg a leaf lies flat on its wall and cannot be told from it.
-        buildIndex(s_h, d_h, e0, m, 0.0, 2.0, 86);  // every 2 deg, refined below
-        for (int ai = 0; ai < index.count; ++ai) {
-          const Score sc = evaluate(s_h, d_h, e0, m, ai);
+        scoreAngles(s_h, d_h, e0, m, 0.0, 2.0, 86);  // every 2 deg, refined below
+        for (int ai = 0; ai < 86; ++ai) {
+          const Score& sc = scores[ai];
           if (sc.score > best.score)
             best = sc, best_h = h, best_sw = sw, best_deg = 2.0 * ai, best_recess = rec, best_s = s_h;
         }
@@ -285,11 +295,12 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     const int reach_steps = door.paired ? 3 : 15;  // 2 cm steps
     for (int ds = -reach_steps; ds <= reach_steps; ++ds) {
       const double s_h = s_center + ds * 0.02;
-      buildIndex(s_h, d_h, e0, m, deg_center - 2.5, 0.5, 11);
-      for (int ai = 0; ai < index.count; ++ai) {
-        const double deg = index.start + ai * index.step;
+      const double start = deg_center - 2.5, step = 0.5;
+      scoreAngles(s_h, d_h, e0, m, start, step, 11);
+      for (int ai = 0; ai < 11; ++ai) {
+        const double deg = start + ai * step;
         if (deg < 0 || deg > 170) continue;
-        const Score sc = evaluate(s_h, d_h, e0, m, ai);
+        const Score& sc = scores[ai];
         if (sc.score > best.score) best = sc, best_deg = deg, best_s = s_h;
       }
     }
