@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <set>
 
 namespace dsr {
@@ -42,6 +43,25 @@ double fastAtan2Deg(double y, double x) {
   return a * (180 / M_PI);
 }
 constexpr double kBearingSlackDeg = 0.01;
+
+// f(0) ... f(n - 1) as OpenMP tasks: run by the threads of the enclosing
+// parallel region as they come free (findDoors runs doorways over the cores,
+// so one doorway's search is shared by a core left idle), or in turn outside
+// one. The first exception thrown is rethrown here.
+template <class F>
+void forEachTask(std::size_t n, const F& f) {
+  std::exception_ptr error;
+#pragma omp taskloop grainsize(1) shared(error, f)
+  for (long long i = 0; i < static_cast<long long>(n); ++i) {
+    try {
+      f(static_cast<std::size_t>(i));
+    } catch (...) {
+#pragma omp critical(dsr_fit_leaf_error)
+      if (!error) error = std::current_exception();
+    }
+  }
+  if (error) std::rethrow_exception(error);
+}
 
 struct Local {  // a point in wall coordinates: s along, d towards the viewer
   double s, d;
@@ -158,11 +178,12 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   const double band_hw = lt + tol;  // farthest a supporting point lies off the hinge line
   const double r_pts = std::hypot(Lmax, band_hw), r_rays = std::hypot(Lmax, lt / 2);
   const std::size_t cells = static_cast<std::size_t>(na_max) * nz;
-  std::vector<char> seen, blocked;  // per angle: leaf bin x z bin
-  std::vector<int> sup, con;        // per angle: leaf bin
-  std::vector<Eigen::Vector2d> E, K, P;
-  std::vector<Score> scores;
-  auto scoreAngles = [&](double s_h, double d_h, double e0, double m, double start, double step, int count) {
+  // The scores of the angles start + i step (i < count) of one hinge, into `scores`.
+  auto scoreAngles = [&](std::vector<Score>& scores, double s_h, double d_h, double e0, double m, double start,
+                         double step, int count) {
+    std::vector<char> seen, blocked;  // per angle: leaf bin x z bin
+    std::vector<int> sup, con;        // per angle: leaf bin
+    std::vector<Eigen::Vector2d> E, K, P;
     seen.assign(count * cells, 0);
     blocked.assign(count * cells, 0);
     sup.assign(static_cast<std::size_t>(count) * na_max, 0);
@@ -266,26 +287,40 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   };
 
   // Global search: hinge at either jamb, either swing side, hinge on the
-  // face or set back (recess), every degree.
+  // face or set back (recess), every degree. The hinges are scored as tasks
+  // (over the cores), the best taken in order.
   std::vector<double> recess_steps;
   for (double r = 0.0; r + lt <= t + 1e-9 && recess_steps.size() < 4; r += 0.05) recess_steps.push_back(r);
-  Score best;
-  int best_h = 0, best_sw = 0;
-  double best_deg = 0, best_recess = 0, best_s = door.s0;
+  struct Hinge {
+    int h, sw;
+    double rec;
+  };
+  std::vector<Hinge> hinges;
   for (int h = 0; h < 2; ++h)
     for (int sw = 0; sw < 2; ++sw)
       for (double rec : recess_steps) {
         if (rec > 0 && rec + lt > t) continue;
-        const double s_h = h == 0 ? door.s0 : door.s1, e0 = h == 0 ? 1.0 : -1.0;
-        const double m = sw == 0 ? 1.0 : -1.0, d_h = sw == 0 ? -rec : -t + rec;
-        // Beyond 170 deg a leaf lies flat on its wall and cannot be told from it.
-        scoreAngles(s_h, d_h, e0, m, 0.0, 2.0, 86);  // every 2 deg, refined below
-        for (int ai = 0; ai < 86; ++ai) {
-          const Score& sc = scores[ai];
-          if (sc.score > best.score)
-            best = sc, best_h = h, best_sw = sw, best_deg = 2.0 * ai, best_recess = rec, best_s = s_h;
-        }
+        hinges.push_back({h, sw, rec});
       }
+  std::vector<std::vector<Score>> hinge_scores(hinges.size());
+  forEachTask(hinges.size(), [&](std::size_t i) {
+    const Hinge& g = hinges[i];
+    const double s_h = g.h == 0 ? door.s0 : door.s1, e0 = g.h == 0 ? 1.0 : -1.0;
+    const double m = g.sw == 0 ? 1.0 : -1.0, d_h = g.sw == 0 ? -g.rec : -t + g.rec;
+    // Beyond 170 deg a leaf lies flat on its wall and cannot be told from it.
+    scoreAngles(hinge_scores[i], s_h, d_h, e0, m, 0.0, 2.0, 86);  // every 2 deg, refined below
+  });
+  Score best;
+  int best_h = 0, best_sw = 0;
+  double best_deg = 0, best_recess = 0, best_s = door.s0;
+  for (std::size_t i = 0; i < hinges.size(); ++i) {
+    const Hinge& g = hinges[i];
+    for (int ai = 0; ai < 86; ++ai) {
+      const Score& sc = hinge_scores[i][ai];
+      if (sc.score > best.score)
+        best = sc, best_h = g.h, best_sw = g.sw, best_deg = 2.0 * ai, best_recess = g.rec, best_s = g.h == 0 ? door.s0 : door.s1;
+    }
+  }
   // Local search: the jamb seen from the wall can be off where a leaf hides
   // or shadows its own doorway; move the hinge along the wall and the angle.
   {
@@ -293,14 +328,18 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     const double d_h = best_sw == 0 ? -best_recess : -t + best_recess;
     const double s_center = best_s, deg_center = best_deg;
     const int reach_steps = door.paired ? 3 : 15;  // 2 cm steps
+    const double start = deg_center - 2.5, step = 0.5;
+    std::vector<std::vector<Score>> shift_scores(2 * reach_steps + 1);
+    forEachTask(shift_scores.size(), [&](std::size_t i) {
+      const double s_h = s_center + (static_cast<int>(i) - reach_steps) * 0.02;
+      scoreAngles(shift_scores[i], s_h, d_h, e0, m, start, step, 11);
+    });
     for (int ds = -reach_steps; ds <= reach_steps; ++ds) {
       const double s_h = s_center + ds * 0.02;
-      const double start = deg_center - 2.5, step = 0.5;
-      scoreAngles(s_h, d_h, e0, m, start, step, 11);
       for (int ai = 0; ai < 11; ++ai) {
         const double deg = start + ai * step;
         if (deg < 0 || deg > 170) continue;
-        const Score& sc = scores[ai];
+        const Score& sc = shift_scores[ds + reach_steps][ai];
         if (sc.score > best.score) best = sc, best_deg = deg, best_s = s_h;
       }
     }
