@@ -225,8 +225,12 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
         for (int ai = 0; ai < count; ++ai) test(ai);
         continue;
       }
-      const double c = bearing(r), dl = std::asin(band_hw / rho) * 180 / M_PI + kBearingSlackDeg;
-      forArc(c - dl, c + dl, test);
+      // b = rho sin(th - c) lies in [-tol, lt + tol] only for th - c within
+      // [-asin(tol / rho), asin((lt + tol) / rho)].
+      const double c = bearing(r);
+      const double below = std::asin(tol / rho) * 180 / M_PI + kBearingSlackDeg;
+      const double above = std::asin(band_hw / rho) * 180 / M_PI + kBearingSlackDeg;
+      forArc(c - below, c + above, test);
     }
     for (const Ray& ray : rays) {
       // The part of the ray that counts: from the sensor to 6 cm before its point.
@@ -267,10 +271,14 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
         continue;
       }
       const double c0 = bearing(w0 + t0 * u), c1 = bearing(w0 + t1 * u);
-      const double span = std::remainder(c1 - c0, 360.0);
+      // remainder(c1 - c0, 360) for |c1 - c0| <= 360 (exact, as remainder is).
+      const double diff = c1 - c0;
+      const double span = diff > 180 ? diff - 360 : diff < -180 ? diff + 360 : diff;
       const double lo = c0 + std::min(0.0, span), hi = lo + std::abs(span);
+      // The leaf's mid-line passes a point X of the chord (bearing c, distance
+      // rho) at th = c + asin(lt / 2 / rho): the arc widens on one side only.
       const double dl = std::asin(std::min(1.0, lt / 2 / rho_min)) * 180 / M_PI + kBearingSlackDeg;
-      forArc(lo - dl, hi + dl, test);
+      forArc(lo - kBearingSlackDeg, hi + dl, test);
     }
     scores.assign(count, Score());
     for (int ai = 0; ai < count; ++ai) {
