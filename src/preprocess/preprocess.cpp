@@ -113,7 +113,7 @@ Points voxelDownsample(const Points& points, double leaf) {
   const double inv = 1.0 / leaf;
   const long long n = static_cast<long long>(points.size());
   std::vector<std::uint64_t> key(points.size());
-#pragma omp parallel for schedule(static) if (n >= 50000)
+#pragma omp parallel for schedule(dynamic, 16384) if (n >= 50000)
   for (long long i = 0; i < n; ++i) {
     const Eigen::Vector3i c = cellOf(points[i], inv);
     key[i] = packCell(c.x(), c.y(), c.z());
@@ -133,7 +133,7 @@ Points sanitizeAndDownsample(const pcl::PointCloud<pcl::PointXYZ>& cloud, double
   const long long n = static_cast<long long>(cloud.size());
   std::vector<std::uint64_t> key(cloud.size());
   long long valid = 0;
-#pragma omp parallel for schedule(static) reduction(+ : valid) if (n >= 50000)
+#pragma omp parallel for schedule(dynamic, 16384) reduction(+ : valid) if (n >= 50000)
   for (long long i = 0; i < n; ++i) {
     const pcl::PointXYZ& p = cloud.points[i];
     // The test of sanitize.
