@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
+#include <limits>
 #include <set>
 
 namespace dsr {
@@ -178,40 +179,51 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   const double band_hw = lt + tol;  // farthest a supporting point lies off the hinge line
   const double r_pts = std::hypot(Lmax, band_hw), r_rays = std::hypot(Lmax, lt / 2);
   const std::size_t cells = static_cast<std::size_t>(na_max) * nz;
-  // The scores of the angles start + i step (i < count) of one hinge, into `scores`.
-  auto scoreAngles = [&](std::vector<Score>& scores, double s_h, double d_h, double e0, double m, double start,
-                         double step, int count) {
-    std::vector<char> seen, blocked;  // per angle: leaf bin x z bin
-    std::vector<int> sup, con;        // per angle: leaf bin
-    std::vector<Eigen::Vector2d> E, K, P;
-    seen.assign(count * cells, 0);
-    blocked.assign(count * cells, 0);
-    sup.assign(static_cast<std::size_t>(count) * na_max, 0);
-    con.assign(static_cast<std::size_t>(count) * na_max, 0);
-    E.resize(count);
-    K.resize(count);
-    P.resize(count);
-    const Eigen::Vector2d H(s_h, d_h);
-    for (int ai = 0; ai < count; ++ai) {
-      const double th = (start + ai * step) * M_PI / 180;
-      E[ai] = Eigen::Vector2d(std::cos(th) * e0, std::sin(th) * m);
-      K[ai] = Eigen::Vector2d(std::sin(th) * e0, -std::cos(th) * m);
+  // One hinge over the angles start + i step (i < count): points first
+  // (support), then rays (contradiction) at the angles still needed, then
+  // the scores (an angle not needed scores -infinity).
+  struct HingeRun {
+    double s_h = 0, d_h = 0, e0 = 1, m = 1, start = 0, step = 1;
+    int count = 0;
+    std::vector<int> sup, con;  // per angle: leaf bin
+    std::vector<Score> scores;
+  };
+  auto bound = [&](const HingeRun& w, int ai) {  // no length of the leaf at angle ai scores more
+    int total = 0;
+    for (int i = 0; i < na_max; ++i) total += w.sup[static_cast<std::size_t>(ai) * na_max + i];
+    return total;
+  };
+  auto axes = [&](const HingeRun& w, std::vector<Eigen::Vector2d>& E, std::vector<Eigen::Vector2d>& K,
+                  std::vector<Eigen::Vector2d>& P) {
+    E.resize(w.count);
+    K.resize(w.count);
+    P.resize(w.count);
+    const Eigen::Vector2d H(w.s_h, w.d_h);
+    for (int ai = 0; ai < w.count; ++ai) {
+      const double th = (w.start + ai * w.step) * M_PI / 180;
+      E[ai] = Eigen::Vector2d(std::cos(th) * w.e0, std::sin(th) * w.m);
+      K[ai] = Eigen::Vector2d(std::sin(th) * w.e0, -std::cos(th) * w.m);
       P[ai] = H + K[ai] * (lt / 2);  // the leaf's mid-plane
     }
-    const double end = start + (count - 1) * step;
-    // f(i) for every angle start + i step within [lo, hi] degrees, modulo 360.
-    auto forArc = [&](double lo, double hi, auto&& f) {
-      for (double shift = -360; shift <= 360; shift += 360) {
-        const double a = lo + shift, b = hi + shift;
-        if (b < start - step || a > end + step) continue;  // no angle of the run
-        const int i0 = std::max(0, static_cast<int>(std::ceil((a - start) / step - 1e-9)));
-        const int i1 = std::min(count - 1, static_cast<int>(std::floor((b - start) / step + 1e-9)));
-        for (int i = i0; i <= i1; ++i) f(i);
-      }
-    };
-    auto bearing = [&](const Eigen::Vector2d& r) { return fastAtan2Deg(m * r.y(), e0 * r.x()); };
+  };
+  // f(i) for every angle start + i step of w within [lo, hi] degrees, modulo 360.
+  auto forArc = [&](const HingeRun& w, double lo, double hi, auto&& f) {
+    const double end = w.start + (w.count - 1) * w.step;
+    for (double shift = -360; shift <= 360; shift += 360) {
+      const double a = lo + shift, b = hi + shift;
+      if (b < w.start - w.step || a > end + w.step) continue;  // no angle of the run
+      const int i0 = std::max(0, static_cast<int>(std::ceil((a - w.start) / w.step - 1e-9)));
+      const int i1 = std::min(w.count - 1, static_cast<int>(std::floor((b - w.start) / w.step + 1e-9)));
+      for (int i = i0; i <= i1; ++i) f(i);
+    }
+  };
+  auto scorePoints = [&](HingeRun& w) {
+    std::vector<char> seen(w.count * cells, 0);  // per angle: leaf bin x z bin
+    w.sup.assign(static_cast<std::size_t>(w.count) * na_max, 0);
+    std::vector<Eigen::Vector2d> E, K, P;
+    axes(w, E, K, P);
     for (const Local& q : pts) {
-      const Eigen::Vector2d r(q.s - s_h, q.d - d_h);
+      const Eigen::Vector2d r(q.s - w.s_h, q.d - w.d_h);
       const double rho = r.norm();
       if (rho > r_pts) continue;
       auto test = [&](int ai) {
@@ -219,19 +231,26 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
         if (a < 0.02 || a >= Lmax || b < -tol || b > lt + tol) return;
         const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
         char& f = seen[ai * cells + static_cast<std::size_t>(ab) * nz + q.zbin];
-        if (!f) f = 1, ++sup[static_cast<std::size_t>(ai) * na_max + ab];
+        if (!f) f = 1, ++w.sup[static_cast<std::size_t>(ai) * na_max + ab];
       };
       if (rho <= band_hw) {
-        for (int ai = 0; ai < count; ++ai) test(ai);
+        for (int ai = 0; ai < w.count; ++ai) test(ai);
         continue;
       }
       // b = rho sin(th - c) lies in [-tol, lt + tol] only for th - c within
       // [-asin(tol / rho), asin((lt + tol) / rho)].
-      const double c = bearing(r);
+      const double c = fastAtan2Deg(w.m * r.y(), w.e0 * r.x());
       const double below = std::asin(tol / rho) * 180 / M_PI + kBearingSlackDeg;
       const double above = std::asin(band_hw / rho) * 180 / M_PI + kBearingSlackDeg;
-      forArc(c - below, c + above, test);
+      forArc(w, c - below, c + above, test);
     }
+  };
+  auto scoreRays = [&](HingeRun& w, const std::vector<char>* need) {
+    std::vector<char> blocked(w.count * cells, 0);  // per angle: leaf bin x z bin
+    w.con.assign(static_cast<std::size_t>(w.count) * na_max, 0);
+    std::vector<Eigen::Vector2d> E, K, P;
+    axes(w, E, K, P);
+    const Eigen::Vector2d H(w.s_h, w.d_h);
     for (const Ray& ray : rays) {
       // The part of the ray that counts: from the sensor to 6 cm before its point.
       const Eigen::Vector2d A = ray.v, B = ray.q - (0.06 / ray.len) * (ray.q - ray.v);
@@ -251,6 +270,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       if (std::max(za, zb) < z0 - 1e-3 || std::min(za, zb) >= z1 + 1e-3) continue;
       const Eigen::Vector2d r = ray.q - ray.v;
       auto test = [&](int ai) {
+        if (need && !(*need)[ai]) return;
         const Eigen::Vector2d& e = E[ai];
         const double denom = r.x() * e.y() - r.y() * e.x();
         if (std::abs(denom) < 1e-9) return;
@@ -262,15 +282,16 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
         if (z < z0 || z >= z1) return;
         const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
         char& f = blocked[ai * cells + static_cast<std::size_t>(ab) * nz + std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
-        if (!f) f = 1, ++con[static_cast<std::size_t>(ai) * na_max + ab];
+        if (!f) f = 1, ++w.con[static_cast<std::size_t>(ai) * na_max + ab];
       };
       const double tc = std::clamp(-bq / uu, t0, t1);
       const double rho_min = (w0 + tc * u).norm();
       if (rho_min <= std::max(0.05, lt / 2)) {
-        for (int ai = 0; ai < count; ++ai) test(ai);
+        for (int ai = 0; ai < w.count; ++ai) test(ai);
         continue;
       }
-      const double c0 = bearing(w0 + t0 * u), c1 = bearing(w0 + t1 * u);
+      const double c0 = fastAtan2Deg(w.m * (w0 + t0 * u).y(), w.e0 * (w0 + t0 * u).x());
+      const double c1 = fastAtan2Deg(w.m * (w0 + t1 * u).y(), w.e0 * (w0 + t1 * u).x());
       // remainder(c1 - c0, 360) for |c1 - c0| <= 360 (exact, as remainder is).
       const double diff = c1 - c0;
       const double span = diff > 180 ? diff - 360 : diff < -180 ? diff + 360 : diff;
@@ -278,17 +299,23 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       // The leaf's mid-line passes a point X of the chord (bearing c, distance
       // rho) at th = c + asin(lt / 2 / rho): the arc widens on one side only.
       const double dl = std::asin(std::min(1.0, lt / 2 / rho_min)) * 180 / M_PI + kBearingSlackDeg;
-      forArc(lo - kBearingSlackDeg, hi + dl, test);
+      forArc(w, lo - kBearingSlackDeg, hi + dl, test);
     }
-    scores.assign(count, Score());
-    for (int ai = 0; ai < count; ++ai) {
-      Score& out = scores[ai];
+  };
+  auto finishScores = [&](HingeRun& w, const std::vector<char>* need) {
+    w.scores.assign(w.count, Score());
+    for (int ai = 0; ai < w.count; ++ai) {
+      Score& out = w.scores[ai];
+      if (need && !(*need)[ai]) {
+        out.score = -std::numeric_limits<double>::infinity();
+        continue;
+      }
       int acc = 0, cells_seen = 0, contra = 0;
       for (int i = 0; i < na_max; ++i) {
         const std::size_t j = static_cast<std::size_t>(ai) * na_max + i;
-        acc += sup[j] - 2 * con[j];
-        cells_seen += sup[j];
-        contra += con[j];
+        acc += w.sup[j] - 2 * w.con[j];
+        cells_seen += w.sup[j];
+        contra += w.con[j];
         if (i + 1 >= na_min && acc > out.score) out = {static_cast<double>(acc), cells_seen, contra, i + 1};
       }
     }
@@ -296,7 +323,10 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
 
   // Global search: hinge at either jamb, either swing side, hinge on the
   // face or set back (recess), every degree. The hinges are scored as tasks
-  // (over the cores), the best taken in order.
+  // (over the cores), the best taken in order. Support bounds a hypothesis's
+  // score from above (contradiction only lowers it): rays are tested only at
+  // the angles whose bound reaches the exact score of the best-bounded one,
+  // the others cannot be the best.
   std::vector<double> recess_steps;
   for (double r = 0.0; r + lt <= t + 1e-9 && recess_steps.size() < 4; r += 0.05) recess_steps.push_back(r);
   struct Hinge {
@@ -310,13 +340,36 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
         if (rec > 0 && rec + lt > t) continue;
         hinges.push_back({h, sw, rec});
       }
-  std::vector<std::vector<Score>> hinge_scores(hinges.size());
-  forEachTask(hinges.size(), [&](std::size_t i) {
+  std::vector<HingeRun> global(hinges.size());
+  for (std::size_t i = 0; i < hinges.size(); ++i) {
     const Hinge& g = hinges[i];
-    const double s_h = g.h == 0 ? door.s0 : door.s1, e0 = g.h == 0 ? 1.0 : -1.0;
-    const double m = g.sw == 0 ? 1.0 : -1.0, d_h = g.sw == 0 ? -g.rec : -t + g.rec;
+    HingeRun& w = global[i];
+    w.s_h = g.h == 0 ? door.s0 : door.s1, w.e0 = g.h == 0 ? 1.0 : -1.0;
+    w.m = g.sw == 0 ? 1.0 : -1.0, w.d_h = g.sw == 0 ? -g.rec : -t + g.rec;
     // Beyond 170 deg a leaf lies flat on its wall and cannot be told from it.
-    scoreAngles(hinge_scores[i], s_h, d_h, e0, m, 0.0, 2.0, 86);  // every 2 deg, refined below
+    w.start = 0.0, w.step = 2.0, w.count = 86;  // every 2 deg, refined below
+  }
+  forEachTask(global.size(), [&](std::size_t i) { scorePoints(global[i]); });
+  double lower = -std::numeric_limits<double>::infinity();  // the exact score of one hypothesis
+  if (!global.empty()) {
+    std::size_t bi = 0;
+    int ba = 0, bb = -1;
+    for (std::size_t i = 0; i < global.size(); ++i)
+      for (int ai = 0; ai < global[i].count; ++ai)
+        if (bound(global[i], ai) > bb) bb = bound(global[i], ai), bi = i, ba = ai;
+    HingeRun probe = global[bi];
+    std::vector<char> only(probe.count, 0);
+    only[ba] = 1;
+    scoreRays(probe, &only);
+    finishScores(probe, &only);
+    lower = probe.scores[ba].score;
+  }
+  forEachTask(global.size(), [&](std::size_t i) {
+    HingeRun& w = global[i];
+    std::vector<char> need(w.count, 0);
+    for (int ai = 0; ai < w.count; ++ai) need[ai] = bound(w, ai) >= lower;
+    scoreRays(w, &need);
+    finishScores(w, &need);
   });
   Score best;
   int best_h = 0, best_sw = 0;
@@ -324,7 +377,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   for (std::size_t i = 0; i < hinges.size(); ++i) {
     const Hinge& g = hinges[i];
     for (int ai = 0; ai < 86; ++ai) {
-      const Score& sc = hinge_scores[i][ai];
+      const Score& sc = global[i].scores[ai];
       if (sc.score > best.score)
         best = sc, best_h = g.h, best_sw = g.sw, best_deg = 2.0 * ai, best_recess = g.rec, best_s = g.h == 0 ? door.s0 : door.s1;
     }
@@ -337,17 +390,21 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     const double s_center = best_s, deg_center = best_deg;
     const int reach_steps = door.paired ? 3 : 15;  // 2 cm steps
     const double start = deg_center - 2.5, step = 0.5;
-    std::vector<std::vector<Score>> shift_scores(2 * reach_steps + 1);
-    forEachTask(shift_scores.size(), [&](std::size_t i) {
-      const double s_h = s_center + (static_cast<int>(i) - reach_steps) * 0.02;
-      scoreAngles(shift_scores[i], s_h, d_h, e0, m, start, step, 11);
+    std::vector<HingeRun> shifts(2 * reach_steps + 1);
+    forEachTask(shifts.size(), [&](std::size_t i) {
+      HingeRun& w = shifts[i];
+      w.s_h = s_center + (static_cast<int>(i) - reach_steps) * 0.02;
+      w.d_h = d_h, w.e0 = e0, w.m = m, w.start = start, w.step = step, w.count = 11;
+      scorePoints(w);
+      scoreRays(w, nullptr);
+      finishScores(w, nullptr);
     });
     for (int ds = -reach_steps; ds <= reach_steps; ++ds) {
       const double s_h = s_center + ds * 0.02;
       for (int ai = 0; ai < 11; ++ai) {
         const double deg = start + ai * step;
         if (deg < 0 || deg > 170) continue;
-        const Score& sc = shift_scores[ds + reach_steps][ai];
+        const Score& sc = shifts[ds + reach_steps].scores[ai];
         if (sc.score > best.score) best = sc, best_deg = deg, best_s = s_h;
       }
     }
