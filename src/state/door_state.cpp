@@ -240,6 +240,14 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       // b = rho sin(th - c) lies in [-tol, lt + tol] only for th - c within
       // [-asin(tol / rho), asin((lt + tol) / rho)].
       const double c = fastAtan2Deg(w.m * r.y(), w.e0 * r.x());
+      // A short run of angles (the local search) often lies wholly inside
+      // that arc: x <= asin(x) tells so without asin (testing more angles
+      // than the arc holds is always safe; the test decides).
+      const double end = w.start + (w.count - 1) * w.step, deg = 180 / M_PI;
+      if (c - tol / rho * deg <= w.start && c + band_hw / rho * deg >= end) {
+        for (int ai = 0; ai < w.count; ++ai) test(ai);
+        continue;
+      }
       const double below = std::asin(tol / rho) * 180 / M_PI + kBearingSlackDeg;
       const double above = std::asin(band_hw / rho) * 180 / M_PI + kBearingSlackDeg;
       forArc(w, c - below, c + above, test);
