@@ -477,6 +477,20 @@ int main(int argc, char** argv) {
       std::printf("%-15s %10s %10s %11s %9s   (doors: the same code in both)\n", "total w/o doors", fmt("%.1f", a).c_str(),
                   fmt("%.1f", b).c_str(), fmt("%.3f", a / b).c_str(), fmt("%.1fx", b / a).c_str());
     }
+    if (!c.more_seeds.empty()) {  // the frames apart: medians of their runs
+      std::printf("%-15s %10s %10s   total ms per frame\n", "seed", "ours", "stock");
+      const auto seeds = c.seeds();
+      for (std::size_t k = 0; k < seeds.size(); ++k) {
+        auto frame = [&](const json& j) {
+          const int n = j["runs"].get<int>();
+          const std::vector<double> all = j["stage_runs_ms"]["total"].get<std::vector<double>>();
+          if (all.size() < (k + 1) * n) return std::nan("");
+          return median(std::vector<double>(all.begin() + k * n, all.begin() + (k + 1) * n));
+        };
+        std::printf("%-15llu %10s %10s\n", static_cast<unsigned long long>(seeds[k]), fmt("%.1f", frame(ours)).c_str(),
+                    have_stock ? fmt("%.1f", frame(stock)).c_str() : "-");
+      }
+    }
     auto mem = [&](const json& j) {
       const double extra = j["peak_extra_kb"].get<double>() / 1024.0;
       return fmt("%.0f", j["peak_rss_kb"].get<double>() / 1024.0) + " MB peak RSS, " + fmt("%.0f", extra) +
