@@ -324,7 +324,7 @@ json accuracySweep(const std::string& sensor, int scenes, std::size_t points) {
   std::vector<eval::EvalResult> ours, stock;
   double ours_ms = 0, stock_ms = 0;
   for (int k = 0; k < scenes; ++k) {
-    const Case c{sensor, points, static_cast<std::uint64_t>(1000 + k)};
+    const Case c{sensor, points, static_cast<std::uint64_t>(1000 + k), {}};
     const Scene s = simulate(c);
     const Parameters p = paramsFor(sensor);
     const PipelineResult a = runImpl("ours", s.cloud, p);
@@ -390,7 +390,7 @@ int main(int argc, char** argv) {
   // baseline treats that as "no more walls".
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
   std::vector<Case> cases;
-  for (std::size_t n : opt.sizes) cases.push_back({"tls", n, opt.seed});
+  for (std::size_t n : opt.sizes) cases.push_back({"tls", n, opt.seed, {}});
   if (opt.rgbd) cases.push_back({"rgbd", 640 * 480, opt.seed, {}});
   if (opt.rgbd && opt.rgbd_door_frames > 0) {
     // The first frames from seed 1000 on (the accuracy sweep's) with a door
