@@ -42,8 +42,10 @@ const char* kUsage = R"(usage: door_state_bench [options]
 Times our pipeline and the stock-PCL baseline (pcl::VoxelGrid,
 NormalEstimationOMP, iterative SACSegmentation, RegionGrowing,
 MomentOfInertiaEstimation, BoundaryEstimation) on the same simulated points:
-laser-scanner rooms of each --sizes and one 640x480 RGB-D frame, seed --seed.
-Per stage: median of --runs runs; peak RSS of each implementation in a child
+laser-scanner rooms of each --sizes and one 640x480 RGB-D frame, seed --seed,
+and the first --rgbd-door-frames RGB-D frames from seed 1000 on with a door in
+view (where the leaf search works). Per stage: median of --runs runs (over
+every run of every frame for the frames with a door); peak RSS of each implementation in a child
 process of its own; door accuracy of both against the simulator's truth, on
 the timed scenes and on --accuracy-scenes more rooms of --accuracy-points.
 
@@ -51,7 +53,8 @@ options:
   --runs R                  repetitions per case (default 5; env BENCH_RUNS is read by make bench)
   --sizes LIST              laser rays per room, comma list (default 100000,400000,1000000,4000000)
   --seed N                  seed of every timed scene (default 7)
-  --no-rgbd                 leave out the RGB-D frame
+  --no-rgbd                 leave out the RGB-D frames
+  --rgbd-door-frames K      RGB-D frames with a door in view timed together (default 5; 0: none)
   --skip-baseline-above N   no baseline on clouds of more than N points (default 4000000: none skipped)
   --baseline-runs R         repetitions of the baseline (default: --runs)
   --accuracy-scenes K       extra laser rooms (seeds 1000..) and RGB-D frames scored once each (default 30; 0: none)
@@ -66,6 +69,7 @@ struct Options {
   std::vector<std::size_t> sizes = {100000, 400000, 1000000, 4000000};
   std::uint64_t seed = 7;
   bool rgbd = true;
+  int rgbd_door_frames = 5;
   std::size_t skip_baseline_above = 4000000;
   int accuracy_scenes = 30;
   std::size_t accuracy_points = 400000;
@@ -103,6 +107,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--baseline-runs") o.baseline_runs = static_cast<int>(toInt(a, value()));
     else if (a == "--seed") o.seed = static_cast<std::uint64_t>(toInt(a, value()));
     else if (a == "--no-rgbd") o.rgbd = false;
+    else if (a == "--rgbd-door-frames") o.rgbd_door_frames = static_cast<int>(toInt(a, value()));
     else if (a == "--skip-baseline-above") o.skip_baseline_above = static_cast<std::size_t>(toInt(a, value()));
     else if (a == "--accuracy-scenes") o.accuracy_scenes = static_cast<int>(toInt(a, value()));
     else if (a == "--accuracy-points") o.accuracy_points = static_cast<std::size_t>(toInt(a, value()));
@@ -123,6 +128,7 @@ Options parse(int argc, char** argv) {
   if (o.baseline_runs < 0) o.baseline_runs = o.runs;
   if (o.baseline_runs < 1 || o.baseline_runs > 1000) throw UsageError("--baseline-runs must lie in [1, 1000]");
   if (o.accuracy_scenes < 0 || o.accuracy_scenes > 1000) throw UsageError("--accuracy-scenes must lie in [0, 1000]");
+  if (o.rgbd_door_frames < 0 || o.rgbd_door_frames > 100) throw UsageError("--rgbd-door-frames must lie in [0, 100]");
   return o;
 }
 
@@ -132,8 +138,17 @@ struct Case {
   std::string sensor;  // tls | rgbd
   std::size_t points;  // rays (tls) or pixels (rgbd)
   std::uint64_t seed;
+  std::vector<std::uint64_t> more_seeds;  // further frames timed with it (the frames with a door)
+  bool door_frames = false;               // the RGB-D frames with a door in view
   std::string name() const {
-    return sensor == "tls" ? "laser " + std::to_string(points / 1000) + "k" : std::string("RGB-D 640x480");
+    if (sensor == "tls") return "laser " + std::to_string(points / 1000) + "k";
+    if (!door_frames) return "RGB-D 640x480";
+    return "RGB-D door x" + std::to_string(more_seeds.size() + 1);
+  }
+  std::vector<std::uint64_t> seeds() const {
+    std::vector<std::uint64_t> all{seed};
+    all.insert(all.end(), more_seeds.begin(), more_seeds.end());
+    return all;
   }
 };
 
@@ -245,22 +260,42 @@ json scoreJson(const eval::EvalResult& e) {
           {"hinge_error_median_m", num(e.hingeErrorMedianM())}};
 }
 
-// One implementation on one case, R runs, in the calling (child) process.
+// One implementation on one case, R runs (of each of its frames), in the calling (child) process.
 json measure(const Case& c, const std::string& impl, int runs) {
-  Scene s = simulate(c);
+  std::vector<Scene> scenes;
+  for (std::uint64_t seed : c.seeds()) {
+    Case one = c;
+    one.seed = seed;
+    one.more_seeds.clear();
+    scenes.push_back(simulate(one));
+  }
   const Parameters p = paramsFor(c.sensor);
   malloc_trim(0);
   { std::ofstream("/proc/self/clear_refs") << "5"; }  // VmHWM := VmRSS
   const long rss_before = statusKb("VmRSS:");
   std::map<std::string, std::vector<double>> stages;
   std::vector<std::string> order;
-  PipelineResult last;
-  for (int r = 0; r < runs; ++r) {
-    last = runImpl(impl, s.cloud, p);
-    for (const auto& kv : last.timing_ms) {
-      if (!stages.count(kv.first)) order.push_back(kv.first);
-      stages[kv.first].push_back(kv.second);
+  std::vector<eval::EvalResult> scores;
+  json doors = json::array(), truth_doors = json::array(), walls = json::array();
+  double sim_ms = 0;
+  std::size_t points_in = 0, points_used = 0;
+  for (const Scene& s : scenes) {
+    PipelineResult last;
+    for (int r = 0; r < runs; ++r) {
+      last = runImpl(impl, s.cloud, p);
+      for (const auto& kv : last.timing_ms) {
+        if (!stages.count(kv.first)) order.push_back(kv.first);
+        stages[kv.first].push_back(kv.second);
+      }
     }
+    scores.push_back(eval::evaluate(s.truth, io::reportJson(last, c.name()), 0.5, true));
+    for (const auto& d : last.doors) doors.push_back({{"state", toString(d.state)}, {"angle_deg", d.opening_angle_deg}});
+    for (const auto& d : s.truth["doors"])
+      if (d.value("in_view", true)) truth_doors.push_back({{"state", d["state"]}, {"angle_deg", d["opening_angle_deg"]}});
+    walls.push_back(last.walls.size());
+    sim_ms += s.sim_ms;
+    points_in = std::max(points_in, last.points_in);
+    points_used = std::max(points_used, last.points_used);
   }
   const long hwm = statusKb("VmHWM:");
   json st = json::object(), all = json::object();
@@ -268,26 +303,21 @@ json measure(const Case& c, const std::string& impl, int runs) {
     st[k] = median(stages[k]);
     all[k] = stages[k];
   }
-  const eval::EvalResult e = eval::evaluate(s.truth, io::reportJson(last, c.name()), 0.5, true);
-  json doors = json::array();
-  for (const auto& d : last.doors) doors.push_back({{"state", toString(d.state)}, {"angle_deg", d.opening_angle_deg}});
-  json truth_doors = json::array();
-  for (const auto& d : s.truth["doors"])
-    if (d.value("in_view", true)) truth_doors.push_back({{"state", d["state"]}, {"angle_deg", d["opening_angle_deg"]}});
   return {{"impl", impl},
           {"runs", runs},
-          {"points_in", last.points_in},
-          {"points_used", last.points_used},
-          {"sim_ms", s.sim_ms},
+          {"seeds", c.seeds()},
+          {"points_in", points_in},
+          {"points_used", points_used},
+          {"sim_ms", sim_ms},
           {"stage_median_ms", st},
           {"stage_runs_ms", all},
           {"rss_before_kb", rss_before},
           {"peak_rss_kb", hwm},
           {"peak_extra_kb", hwm - rss_before},
-          {"accuracy", scoreJson(e)},
+          {"accuracy", scoreJson(eval::merge(scores))},
           {"doors", doors},
           {"truth_doors", truth_doors},
-          {"walls", last.walls.size()}};
+          {"walls", scenes.size() == 1 ? walls[0] : walls}};
 }
 
 // Accuracy only: both implementations on K extra scenes, one run each.
@@ -295,7 +325,7 @@ json accuracySweep(const std::string& sensor, int scenes, std::size_t points) {
   std::vector<eval::EvalResult> ours, stock;
   double ours_ms = 0, stock_ms = 0;
   for (int k = 0; k < scenes; ++k) {
-    const Case c{sensor, points, static_cast<std::uint64_t>(1000 + k)};
+    const Case c{sensor, points, static_cast<std::uint64_t>(1000 + k), {}, false};
     const Scene s = simulate(c);
     const Parameters p = paramsFor(sensor);
     const PipelineResult a = runImpl("ours", s.cloud, p);
@@ -361,8 +391,29 @@ int main(int argc, char** argv) {
   // baseline treats that as "no more walls".
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
   std::vector<Case> cases;
-  for (std::size_t n : opt.sizes) cases.push_back({"tls", n, opt.seed});
-  if (opt.rgbd) cases.push_back({"rgbd", 640 * 480, opt.seed});
+  for (std::size_t n : opt.sizes) cases.push_back({"tls", n, opt.seed, {}, false});
+  if (opt.rgbd) cases.push_back({"rgbd", 640 * 480, opt.seed, {}, false});
+  if (opt.rgbd && opt.rgbd_door_frames > 0) {
+    // The first frames from seed 1000 on (the accuracy sweep's) with a door
+    // in view, found in a child (the simulator runs OpenMP, which a process
+    // must not have started before it forks the children that measure).
+    const json found = inChild([&] {
+      json seeds = json::array();
+      for (std::uint64_t seed = 1000; seed < 1200 && static_cast<int>(seeds.size()) < opt.rgbd_door_frames; ++seed) {
+        const Scene s = simulate({"rgbd", 640 * 480, seed, {}, false});
+        for (const auto& d : s.truth["doors"])
+          if (d.value("in_view", true)) {
+            seeds.push_back(seed);
+            break;
+          }
+      }
+      return json{{"seeds", seeds}};
+    });
+    std::vector<std::uint64_t> seeds;
+    if (found.contains("seeds"))
+      for (const auto& v : found["seeds"]) seeds.push_back(v.get<std::uint64_t>());
+    if (!seeds.empty()) cases.push_back({"rgbd", 640 * 480, seeds.front(), {seeds.begin() + 1, seeds.end()}, true});
+  }
 
   json machine = {{"cpus", sysconf(_SC_NPROCESSORS_ONLN)},
                   {"cpu", shell("lscpu | sed -n 's/^Model name: *//p' | head -n1")},
@@ -389,7 +440,14 @@ int main(int argc, char** argv) {
   const std::vector<std::string> stage_order = {"preprocess", "normals", "floor_ceiling", "walls", "doors", "segments", "boundary", "total"};
   json results = json::array();
   for (const Case& c : cases) {
-    std::printf("\n== %s, seed %llu ==\n", c.name().c_str(), static_cast<unsigned long long>(c.seed));
+    if (!c.door_frames) {
+      std::printf("\n== %s, seed %llu ==\n", c.name().c_str(), static_cast<unsigned long long>(c.seed));
+    } else {
+      std::string list;
+      for (std::uint64_t seed : c.seeds()) list += (list.empty() ? "" : ",") + std::to_string(seed);
+      std::printf("\n== %s: RGB-D frames with a door in view, seeds %s; medians over every run of every frame ==\n",
+                  c.name().c_str(), list.c_str());
+    }
     json ours = inChild([&] { return measure(c, "ours", opt.runs); });
     json stock;
     const bool skip = c.points > opt.skip_baseline_above;
@@ -420,6 +478,20 @@ int main(int argc, char** argv) {
       std::printf("%-15s %10s %10s %11s %9s   (doors: the same code in both)\n", "total w/o doors", fmt("%.1f", a).c_str(),
                   fmt("%.1f", b).c_str(), fmt("%.3f", a / b).c_str(), fmt("%.1fx", b / a).c_str());
     }
+    if (c.door_frames) {  // the frames apart: medians of their runs
+      std::printf("%-15s %10s %10s   total ms per frame\n", "seed", "ours", "stock");
+      const auto seeds = c.seeds();
+      for (std::size_t k = 0; k < seeds.size(); ++k) {
+        auto frame = [&](const json& j) {
+          const int n = j["runs"].get<int>();
+          const std::vector<double> all = j["stage_runs_ms"]["total"].get<std::vector<double>>();
+          if (all.size() < (k + 1) * n) return std::nan("");
+          return median(std::vector<double>(all.begin() + k * n, all.begin() + (k + 1) * n));
+        };
+        std::printf("%-15llu %10s %10s\n", static_cast<unsigned long long>(seeds[k]), fmt("%.1f", frame(ours)).c_str(),
+                    have_stock ? fmt("%.1f", frame(stock)).c_str() : "-");
+      }
+    }
     auto mem = [&](const json& j) {
       const double extra = j["peak_extra_kb"].get<double>() / 1024.0;
       return fmt("%.0f", j["peak_rss_kb"].get<double>() / 1024.0) + " MB peak RSS, " + fmt("%.0f", extra) +
@@ -429,7 +501,7 @@ int main(int argc, char** argv) {
     if (have_stock) std::printf("memory stock: %s\n", mem(stock).c_str());
     std::printf("accuracy ours:  %s\n", fmtAcc(ours["accuracy"]).c_str());
     if (have_stock) std::printf("accuracy stock: %s\n", fmtAcc(stock["accuracy"]).c_str());
-    json r = {{"case", c.name()}, {"sensor", c.sensor}, {"rays", c.points}, {"seed", c.seed},
+    json r = {{"case", c.name()}, {"sensor", c.sensor}, {"rays", c.points}, {"seed", c.seed}, {"seeds", c.seeds()},
               {"input_bytes", ours["points_in"].get<double>() * sizeof(pcl::PointXYZ)}, {"ours", ours}};
     if (have_stock) {
       r["stock"] = stock;

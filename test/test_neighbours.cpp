@@ -9,6 +9,9 @@
 #include <random>
 #include <tuple>
 
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
 #include "door_state_recognition/preprocess/cell_map.hpp"
 #include "door_state_recognition/preprocess/preprocess.hpp"
 #include "door_state_recognition/segmentation/neighbour_grid.hpp"
@@ -66,6 +69,50 @@ TEST(VoxelGrid, EqualsANaiveCentroidPerVoxelInFirstSeenOrder) {
       EXPECT_LT((out[i] - (c.first / c.second).cast<float>()).norm(), 1e-3f) << "voxel " << i;
     }
   }
+}
+
+TEST(VoxelGrid, LargeCloudsGiveExactlyTheNaiveCentroidsAndSanitizingInThePassChangesNothing) {
+  // Enough points for the voxel grid to share its cells among the cores, in
+  // runs along a scan line (as a scanner delivers them), with garbage mixed in.
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<float> u(-2.0f, 2.0f), jitter(-0.004f, 0.004f);
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  for (int line = 0; line < 400; ++line) {
+    const Eigen::Vector3f a(u(rng), u(rng), u(rng)), b(u(rng), u(rng), u(rng));
+    for (int k = 0; k < 300; ++k) {
+      const Eigen::Vector3f p = a + (b - a) * (k / 300.0f) + Eigen::Vector3f(jitter(rng), jitter(rng), jitter(rng));
+      cloud.push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
+    }
+    cloud.push_back(pcl::PointXYZ(std::nanf(""), 0, 0));
+    cloud.push_back(pcl::PointXYZ(0, 2e4f, 0));
+  }
+  const double leaf = 0.02, max_abs = 1e4;
+  const auto pts = preprocess::sanitize(cloud, max_abs);
+  ASSERT_EQ(pts.size(), 400u * 300u);
+  std::map<std::tuple<long, long, long>, std::pair<Eigen::Vector3d, int>> cells;
+  std::vector<std::tuple<long, long, long>> order;
+  for (const auto& p : pts) {
+    const auto k = std::make_tuple(static_cast<long>(std::floor(p.x() * (1 / leaf))), static_cast<long>(std::floor(p.y() * (1 / leaf))),
+                                   static_cast<long>(std::floor(p.z() * (1 / leaf))));
+    auto it = cells.find(k);
+    if (it == cells.end()) {
+      cells[k] = {p.cast<double>(), 1};
+      order.push_back(k);
+    } else {
+      it->second.first += p.cast<double>();
+      ++it->second.second;
+    }
+  }
+  const auto out = preprocess::voxelDownsample(pts, leaf);
+  ASSERT_EQ(out.size(), order.size());
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    const auto& c = cells[order[i]];
+    ASSERT_EQ(out[i], (c.first / c.second).cast<float>()) << "voxel " << i;
+  }
+  std::size_t kept = 0;
+  const auto fused = preprocess::sanitizeAndDownsample(cloud, max_abs, leaf, &kept);
+  EXPECT_EQ(kept, pts.size());
+  EXPECT_EQ(fused, out);
 }
 
 TEST(NeighbourGrid, FindsExactlyThePointsWithinTheRadius) {

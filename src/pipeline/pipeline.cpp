@@ -50,10 +50,10 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   // --- preprocess: sanitise, downsample ---------------------------------------
   preprocess::Points thinned;
   {
-    const preprocess::Points raw = preprocess::sanitize(cloud, p.max_abs_coordinate);
-    if (raw.size() < cloud.size())
-      res.warnings.push_back(std::to_string(cloud.size() - raw.size()) + " non-finite or out-of-range points dropped");
-    thinned = preprocess::voxelDownsample(raw, p.voxel_size);
+    std::size_t kept = 0;
+    thinned = preprocess::sanitizeAndDownsample(cloud, p.max_abs_coordinate, p.voxel_size, &kept);
+    if (kept < cloud.size())
+      res.warnings.push_back(std::to_string(cloud.size() - kept) + " non-finite or out-of-range points dropped");
   }
   res.points_used = thinned.size();
   watch.mark("preprocess");

@@ -8,6 +8,10 @@
 #include <stdexcept>
 #include <unordered_map>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include "door_state_recognition/preprocess/cell_map.hpp"
 
 namespace dsr {
@@ -38,27 +42,113 @@ Points sanitize(const pcl::PointCloud<pcl::PointXYZ>& cloud, double max_abs) {
   return out;
 }
 
+namespace {
+
+constexpr std::uint64_t kNoKey = ~std::uint64_t(0);  // packed keys use 63 bits
+
+// The voxel grid of the points point(i), i < n, whose key(i) is not kNoKey.
+// Cells are numbered in order of first occurrence: the output keeps the input's order.
+template <class PointAt>
+Points downsample(long long n, const PointAt& point, const std::vector<std::uint64_t>& key) {
+  // The cells are shared out among the cores by a hash of their key: each
+  // numbers and sums its own over all points in input order (the same sums,
+  // in the same order, as one core makes); then they are merged by first point.
+  int parts = 1;
+#ifdef _OPENMP
+  if (n >= 50000) parts = std::clamp(omp_get_max_threads(), 1, 8);
+#endif
+  struct Part {
+    std::vector<Eigen::Vector3d> sum;
+    std::vector<int> count;
+    std::vector<long long> first;  // the cell's first point
+  };
+  std::vector<Part> part(parts);
+  const std::size_t expected = std::min<std::size_t>(static_cast<std::size_t>(n) / (2 * parts) + 1, 1 << 17);
+  auto partOf = [parts](std::uint64_t k) { return static_cast<int>(((k * 0x9E3779B97F4A7C15ull) >> 40) % parts); };
+  auto fill = [&](int t) {
+    Part& pt = part[t];
+    CellMap cells(expected);
+    pt.sum.reserve(expected);
+    pt.count.reserve(expected);
+    pt.first.reserve(expected);
+    std::uint64_t last_key = kNoKey;
+    std::uint32_t last_id = 0;
+    for (long long i = 0; i < n; ++i) {
+      if (key[i] == kNoKey || (parts > 1 && partOf(key[i]) != t)) continue;
+      // A scan visits a voxel in runs of points: the run's cell is known.
+      const std::uint32_t id = key[i] == last_key ? last_id : cells.insert(key[i]);
+      last_key = key[i];
+      last_id = id;
+      const Eigen::Vector3f p = point(i);
+      if (id == pt.sum.size()) {
+        pt.sum.push_back(p.template cast<double>());
+        pt.count.push_back(1);
+        pt.first.push_back(i);
+      } else {
+        pt.sum[id] += p.template cast<double>();
+        ++pt.count[id];
+      }
+    }
+  };
+#pragma omp parallel for schedule(static, 1) num_threads(parts) if (parts > 1)
+  for (int t = 0; t < parts; ++t) fill(t);
+  std::size_t total = 0;
+  for (const Part& pt : part) total += pt.sum.size();
+  Points out(total);
+  std::vector<std::size_t> next(parts, 0);
+  for (std::size_t k = 0; k < total; ++k) {
+    int best = -1;
+    for (int t = 0; t < parts; ++t)
+      if (next[t] < part[t].first.size() && (best < 0 || part[t].first[next[t]] < part[best].first[next[best]])) best = t;
+    const std::size_t id = next[best]++;
+    out[k] = (part[best].sum[id] / part[best].count[id]).template cast<float>();
+  }
+  return out;
+}
+
+}  // namespace
+
 Points voxelDownsample(const Points& points, double leaf) {
   if (leaf <= 0 || points.empty()) return points;
-  // Cells numbered in order of first occurrence: the output keeps the input's order.
   const double inv = 1.0 / leaf;
-  CellMap cells(std::min<std::size_t>(points.size(), 1 << 16));
-  std::vector<Eigen::Vector3d> sum;
-  std::vector<int> count;
-  for (const auto& p : points) {
-    const Eigen::Vector3i c = cellOf(p, inv);
-    const std::uint32_t id = cells.insert(packCell(c.x(), c.y(), c.z()));
-    if (id == sum.size()) {
-      sum.push_back(p.cast<double>());
-      count.push_back(1);
+  const long long n = static_cast<long long>(points.size());
+  std::vector<std::uint64_t> key(points.size());
+#pragma omp parallel for schedule(dynamic, 16384) if (n >= 50000)
+  for (long long i = 0; i < n; ++i) {
+    const Eigen::Vector3i c = cellOf(points[i], inv);
+    key[i] = packCell(c.x(), c.y(), c.z());
+  }
+  return downsample(n, [&](long long i) { return points[i]; }, key);
+}
+
+Points sanitizeAndDownsample(const pcl::PointCloud<pcl::PointXYZ>& cloud, double max_abs, double leaf,
+                             std::size_t* kept) {
+  if (leaf <= 0 || cloud.empty()) {
+    Points out = sanitize(cloud, max_abs);
+    if (kept) *kept = out.size();
+    return out;
+  }
+  const double inv = 1.0 / leaf;
+  const float lim = static_cast<float>(max_abs);
+  const long long n = static_cast<long long>(cloud.size());
+  std::vector<std::uint64_t> key(cloud.size());
+  long long valid = 0;
+#pragma omp parallel for schedule(dynamic, 16384) reduction(+ : valid) if (n >= 50000)
+  for (long long i = 0; i < n; ++i) {
+    const pcl::PointXYZ& p = cloud.points[i];
+    // The test of sanitize.
+    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && std::abs(p.x) <= lim &&
+        std::abs(p.y) <= lim && std::abs(p.z) <= lim) {
+      const Eigen::Vector3i c = cellOf(Eigen::Vector3f(p.x, p.y, p.z), inv);
+      key[i] = packCell(c.x(), c.y(), c.z());
+      ++valid;
     } else {
-      sum[id] += p.cast<double>();
-      ++count[id];
+      key[i] = kNoKey;
     }
   }
-  Points out(sum.size());
-  for (std::size_t i = 0; i < sum.size(); ++i) out[i] = (sum[i] / count[i]).cast<float>();
-  return out;
+  if (kept) *kept = static_cast<std::size_t>(valid);
+  return downsample(
+      n, [&](long long i) { return Eigen::Vector3f(cloud.points[i].x, cloud.points[i].y, cloud.points[i].z); }, key);
 }
 
 std::optional<Eigen::Vector3d> estimateUp(const Points& points, const Points& normals, unsigned seed) {

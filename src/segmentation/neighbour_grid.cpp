@@ -15,9 +15,15 @@ NeighbourGrid::NeighbourGrid(const std::vector<Eigen::Vector3f>& points, float c
   CellMap map(std::max<std::size_t>(n, 1));
   std::vector<std::uint32_t> cell_of(n);
   std::vector<std::uint32_t> count;
+  std::uint64_t last_key = ~std::uint64_t(0);  // no packed key
+  std::uint32_t last_id = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector3i c = cellOf(points[i], inv_);
-    const std::uint32_t id = map.insert(packCell(c.x(), c.y(), c.z()));
+    // Points come in scan order: runs of them share a cell.
+    const std::uint64_t key = packCell(c.x(), c.y(), c.z());
+    const std::uint32_t id = key == last_key ? last_id : map.insert(key);
+    last_key = key;
+    last_id = id;
     if (id == count.size()) {
       count.push_back(0);
       coord_.push_back(c);

@@ -64,9 +64,16 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
   preprocess::CellMap coarse_map(cells / 4 + 1);
   std::vector<Moments> cm;
   std::vector<std::uint32_t> coarse_of(cells);
+  cm.reserve(cells / 4 + 1);
+  std::uint64_t last_key = ~std::uint64_t(0);  // no packed key
+  std::uint32_t last_id = 0;
   for (std::size_t c = 0; c < cells; ++c) {
     const Eigen::Vector3i q = coarseOf(c);
-    const std::uint32_t id = coarse_map.insert(preprocess::packCell(q.x(), q.y(), q.z()));
+    // Cells come in scan order: runs of them share a coarse cell.
+    const std::uint64_t key = preprocess::packCell(q.x(), q.y(), q.z());
+    const std::uint32_t id = key == last_key ? last_id : coarse_map.insert(key);
+    last_key = key;
+    last_id = id;
     if (id == cm.size()) cm.emplace_back();
     cm[id].add(m[c]);
     coarse_of[c] = id;

@@ -3,6 +3,8 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <exception>
+#include <limits>
 #include <set>
 
 namespace dsr {
@@ -43,6 +45,25 @@ double fastAtan2Deg(double y, double x) {
 }
 constexpr double kBearingSlackDeg = 0.01;
 
+// f(0) ... f(n - 1) as OpenMP tasks: run by the threads of the enclosing
+// parallel region as they come free (findDoors runs doorways over the cores,
+// so one doorway's search is shared by a core left idle), or in turn outside
+// one. The first exception thrown is rethrown here.
+template <class F>
+void forEachTask(std::size_t n, const F& f) {
+  std::exception_ptr error;
+#pragma omp taskloop grainsize(1) shared(error, f)
+  for (long long i = 0; i < static_cast<long long>(n); ++i) {
+    try {
+      f(static_cast<std::size_t>(i));
+    } catch (...) {
+#pragma omp critical(dsr_fit_leaf_error)
+      if (!error) error = std::current_exception();
+    }
+  }
+  if (error) std::rethrow_exception(error);
+}
+
 struct Local {  // a point in wall coordinates: s along, d towards the viewer
   double s, d;
   int zbin, index;
@@ -63,8 +84,18 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   // A leaf may be longer than the doorway seen (a leaf ajar hides its own
   // doorway): hypotheses reach up to the widest door from either jamb.
   const double Lmax = door.paired ? L + 0.05 : std::max(L, p.door_max_width), reach_h = Lmax + 0.15;
+  // std::hypot(x, y) <= reach_h, calling hypot only where the squares are too close to tell.
+  const double reach_h2 = reach_h * reach_h;
+  auto withinReach = [&](double x, double y) {
+    if (std::abs(x) > reach_h) return false;  // hypot(x, y) >= |x|
+    const double r2 = x * x + y * y;
+    if (r2 < reach_h2 * (1 - 1e-9)) return true;
+    if (r2 > reach_h2 * (1 + 1e-9)) return false;
+    return std::hypot(x, y) <= reach_h;
+  };
   auto nearJamb = [&](double s, double d) {
-    return std::hypot(s - door.s0, d + t / 2) <= reach_h || std::hypot(s - door.s1, d + t / 2) <= reach_h;
+    if (std::abs(d + t / 2) > reach_h) return false;
+    return withinReach(s - door.s0, d + t / 2) || withinReach(s - door.s1, d + t / 2);
   };
 
   std::vector<Local> pts, band;
@@ -131,8 +162,6 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   // With both trim legs seen the leaf spans the doorway; otherwise its length is sought.
   const int na_min = door.paired ? std::max(1, na - 1)
                                  : std::min(na, std::max(1, static_cast<int>(std::floor((p.door_min_width - 0.05) / abin))));
-  std::vector<char> seen(static_cast<std::size_t>(na_max) * nz), blocked(seen.size());
-  std::vector<int> sup(na_max), con(na_max);
   struct Score {
     double score = -1e9;
     int cells = 0, contra = 0, bins = 0;
@@ -141,51 +170,96 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   // swing side m, angle th. Support (cells holding points) against
   // contradiction (cells rays went through), with the best leaf length: the
   // shortest reaching the largest sum of support minus twice contradiction.
-  // Which points and rays can touch a leaf at each angle of a set: for one
-  // hinge and swing, a point lies within the leaf's band only for angles
-  // near its own bearing from the hinge, and a ray crosses the leaf only for
-  // angles within the arc its chord subtends. Bucketing them by angle once
-  // per hinge makes each hypothesis test only what can touch it (the exact
-  // test below is unchanged, so the result is the same as testing all).
-  struct AngleIndex {
-    double start = 0, step = 1;
-    int count = 0;
-    std::vector<std::vector<int>> pts, rays;
-  } index;
+  // The angles of one hinge and swing are scored together: a point lies
+  // within the leaf's band only for angles near its own bearing from the
+  // hinge, and a ray crosses the leaf only for angles within the arc its
+  // chord subtends, so each point and ray is tested (exactly, below) only at
+  // the angles of its arc, widened by kBearingSlackDeg; the result is the
+  // same as testing every point and ray at every angle.
   const double band_hw = lt + tol;  // farthest a supporting point lies off the hinge line
   const double r_pts = std::hypot(Lmax, band_hw), r_rays = std::hypot(Lmax, lt / 2);
-  auto addArc = [&](std::vector<std::vector<int>>& buckets, int id, double lo, double hi) {
-    // Every angle start + i step within [lo, hi] degrees, modulo 360.
-    for (double shift = -360; shift <= 360; shift += 360) {
-      const double a = lo + shift, b = hi + shift;
-      const int i0 = std::max(0, static_cast<int>(std::ceil((a - index.start) / index.step - 1e-9)));
-      const int i1 = std::min(index.count - 1, static_cast<int>(std::floor((b - index.start) / index.step + 1e-9)));
-      for (int i = i0; i <= i1; ++i) buckets[i].push_back(id);
+  const std::size_t cells = static_cast<std::size_t>(na_max) * nz;
+  // One hinge over the angles start + i step (i < count): points first
+  // (support), then rays (contradiction) at the angles still needed, then
+  // the scores (an angle not needed scores -infinity).
+  struct HingeRun {
+    double s_h = 0, d_h = 0, e0 = 1, m = 1, start = 0, step = 1;
+    int count = 0;
+    std::vector<int> sup, con;  // per angle: leaf bin
+    std::vector<Score> scores;
+  };
+  auto bound = [&](const HingeRun& w, int ai) {  // no length of the leaf at angle ai scores more
+    int total = 0;
+    for (int i = 0; i < na_max; ++i) total += w.sup[static_cast<std::size_t>(ai) * na_max + i];
+    return total;
+  };
+  auto axes = [&](const HingeRun& w, std::vector<Eigen::Vector2d>& E, std::vector<Eigen::Vector2d>& K,
+                  std::vector<Eigen::Vector2d>& P) {
+    E.resize(w.count);
+    K.resize(w.count);
+    P.resize(w.count);
+    const Eigen::Vector2d H(w.s_h, w.d_h);
+    for (int ai = 0; ai < w.count; ++ai) {
+      const double th = (w.start + ai * w.step) * M_PI / 180;
+      E[ai] = Eigen::Vector2d(std::cos(th) * w.e0, std::sin(th) * w.m);
+      K[ai] = Eigen::Vector2d(std::sin(th) * w.e0, -std::cos(th) * w.m);
+      P[ai] = H + K[ai] * (lt / 2);  // the leaf's mid-plane
     }
   };
-  auto buildIndex = [&](double s_h, double d_h, double e0, double m, double start_deg, double step_deg, int count) {
-    index.start = start_deg;
-    index.step = step_deg;
-    index.count = count;
-    index.pts.resize(count);
-    index.rays.resize(count);
-    for (auto& b : index.pts) b.clear();
-    for (auto& b : index.rays) b.clear();
-    const Eigen::Vector2d H(s_h, d_h);
-    auto bearing = [&](const Eigen::Vector2d& r) { return fastAtan2Deg(m * r.y(), e0 * r.x()); };
-    for (std::size_t j = 0; j < pts.size(); ++j) {
-      const Eigen::Vector2d r(pts[j].s - s_h, pts[j].d - d_h);
+  // f(i) for every angle start + i step of w within [lo, hi] degrees, modulo 360.
+  auto forArc = [&](const HingeRun& w, double lo, double hi, auto&& f) {
+    const double end = w.start + (w.count - 1) * w.step;
+    for (double shift = -360; shift <= 360; shift += 360) {
+      const double a = lo + shift, b = hi + shift;
+      if (b < w.start - w.step || a > end + w.step) continue;  // no angle of the run
+      const int i0 = std::max(0, static_cast<int>(std::ceil((a - w.start) / w.step - 1e-9)));
+      const int i1 = std::min(w.count - 1, static_cast<int>(std::floor((b - w.start) / w.step + 1e-9)));
+      for (int i = i0; i <= i1; ++i) f(i);
+    }
+  };
+  auto scorePoints = [&](HingeRun& w) {
+    std::vector<char> seen(w.count * cells, 0);  // per angle: leaf bin x z bin
+    w.sup.assign(static_cast<std::size_t>(w.count) * na_max, 0);
+    std::vector<Eigen::Vector2d> E, K, P;
+    axes(w, E, K, P);
+    for (const Local& q : pts) {
+      const Eigen::Vector2d r(q.s - w.s_h, q.d - w.d_h);
       const double rho = r.norm();
       if (rho > r_pts) continue;
+      auto test = [&](int ai) {
+        const double a = r.dot(E[ai]), b = r.dot(K[ai]);
+        if (a < 0.02 || a >= Lmax || b < -tol || b > lt + tol) return;
+        const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
+        char& f = seen[ai * cells + static_cast<std::size_t>(ab) * nz + q.zbin];
+        if (!f) f = 1, ++w.sup[static_cast<std::size_t>(ai) * na_max + ab];
+      };
       if (rho <= band_hw) {
-        addArc(index.pts, static_cast<int>(j), -360, 360);
+        for (int ai = 0; ai < w.count; ++ai) test(ai);
         continue;
       }
-      const double c = bearing(r), dl = std::asin(band_hw / rho) * 180 / M_PI + kBearingSlackDeg;
-      addArc(index.pts, static_cast<int>(j), c - dl, c + dl);
+      // b = rho sin(th - c) lies in [-tol, lt + tol] only for th - c within
+      // [-asin(tol / rho), asin((lt + tol) / rho)].
+      const double c = fastAtan2Deg(w.m * r.y(), w.e0 * r.x());
+      // A short run of angles (the local search) often lies wholly inside
+      // that arc: x <= asin(x) tells so without asin (testing more angles
+      // than the arc holds is always safe; the test decides).
+      const double end = w.start + (w.count - 1) * w.step, deg = 180 / M_PI;
+      if (c - tol / rho * deg <= w.start && c + band_hw / rho * deg >= end) {
+        for (int ai = 0; ai < w.count; ++ai) test(ai);
+        continue;
+      }
+      const double below = std::asin(tol / rho) * 180 / M_PI + kBearingSlackDeg;
+      const double above = std::asin(band_hw / rho) * 180 / M_PI + kBearingSlackDeg;
+      forArc(w, c - below, c + above, test);
     }
-    for (std::size_t j = 0; j < rays.size(); ++j) {
-      const Ray& ray = rays[j];
+  };
+  auto scoreRays = [&](HingeRun& w, const std::vector<char>* need) {
+    std::vector<char> blocked(w.count * cells, 0);  // per angle: leaf bin x z bin
+    w.con.assign(static_cast<std::size_t>(w.count) * na_max, 0);
+    std::vector<Eigen::Vector2d> E, K, P;
+    axes(w, E, K, P);
+    const Eigen::Vector2d H(w.s_h, w.d_h);
+    for (const Ray& ray : rays) {
       // The part of the ray that counts: from the sensor to 6 cm before its point.
       const Eigen::Vector2d A = ray.v, B = ray.q - (0.06 / ray.len) * (ray.q - ray.v);
       const Eigen::Vector2d u = B - A, w0 = A - H;
@@ -197,85 +271,125 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       const double sq = std::sqrt(disc);
       const double t0 = std::max(0.0, (-bq - sq) / uu), t1 = std::min(1.0, (-bq + sq) / uu);
       if (t0 >= t1) continue;
+      // Every crossing with a leaf lies on that chord: a ray passing above or
+      // below the leaf's heights there crosses none (1 mm spares rounding).
+      const double lam_max = 1 - 0.06 / ray.len, dz = ray.qz - ray.vz;
+      const double za = ray.vz + t0 * lam_max * dz, zb = ray.vz + t1 * lam_max * dz;
+      if (std::max(za, zb) < z0 - 1e-3 || std::min(za, zb) >= z1 + 1e-3) continue;
+      const Eigen::Vector2d r = ray.q - ray.v;
+      auto test = [&](int ai) {
+        if (need && !(*need)[ai]) return;
+        const Eigen::Vector2d& e = E[ai];
+        const double denom = r.x() * e.y() - r.y() * e.x();
+        if (std::abs(denom) < 1e-9) return;
+        const Eigen::Vector2d wp = P[ai] - ray.v;
+        const double lam = (wp.x() * e.y() - wp.y() * e.x()) / denom;
+        const double a = (wp.x() * r.y() - wp.y() * r.x()) / denom;
+        if (a < 0.05 || a >= Lmax || lam <= 0 || lam > lam_max) return;
+        const double z = ray.vz + lam * dz;
+        if (z < z0 || z >= z1) return;
+        const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
+        char& f = blocked[ai * cells + static_cast<std::size_t>(ab) * nz + std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
+        if (!f) f = 1, ++w.con[static_cast<std::size_t>(ai) * na_max + ab];
+      };
       const double tc = std::clamp(-bq / uu, t0, t1);
       const double rho_min = (w0 + tc * u).norm();
       if (rho_min <= std::max(0.05, lt / 2)) {
-        addArc(index.rays, static_cast<int>(j), -360, 360);
+        for (int ai = 0; ai < w.count; ++ai) test(ai);
         continue;
       }
-      const double c0 = bearing(w0 + t0 * u), c1 = bearing(w0 + t1 * u);
-      const double span = std::remainder(c1 - c0, 360.0);
+      const double c0 = fastAtan2Deg(w.m * (w0 + t0 * u).y(), w.e0 * (w0 + t0 * u).x());
+      const double c1 = fastAtan2Deg(w.m * (w0 + t1 * u).y(), w.e0 * (w0 + t1 * u).x());
+      // remainder(c1 - c0, 360) for |c1 - c0| <= 360 (exact, as remainder is).
+      const double diff = c1 - c0;
+      const double span = diff > 180 ? diff - 360 : diff < -180 ? diff + 360 : diff;
       const double lo = c0 + std::min(0.0, span), hi = lo + std::abs(span);
+      // The leaf's mid-line passes a point X of the chord (bearing c, distance
+      // rho) at th = c + asin(lt / 2 / rho): the arc widens on one side only.
       const double dl = std::asin(std::min(1.0, lt / 2 / rho_min)) * 180 / M_PI + kBearingSlackDeg;
-      addArc(index.rays, static_cast<int>(j), lo - dl, hi + dl);
+      forArc(w, lo - kBearingSlackDeg, hi + dl, test);
     }
   };
-  // One hypothesis, at angle number ai of the index built for its hinge.
-  auto evaluate = [&](double s_h, double d_h, double e0, double m, int ai) {
-    const double th = (index.start + ai * index.step) * M_PI / 180;
-    const Eigen::Vector2d H(s_h, d_h);
-    const Eigen::Vector2d e(std::cos(th) * e0, std::sin(th) * m), k(std::sin(th) * e0, -std::cos(th) * m);
-    std::fill(seen.begin(), seen.end(), 0);
-    std::fill(blocked.begin(), blocked.end(), 0);
-    std::fill(sup.begin(), sup.end(), 0);
-    std::fill(con.begin(), con.end(), 0);
-    for (int j : index.pts[ai]) {
-      const Local& q = pts[j];
-      const Eigen::Vector2d r(q.s - s_h, q.d - d_h);
-      const double a = r.dot(e), b = r.dot(k);
-      if (a < 0.02 || a >= Lmax || b < -tol || b > lt + tol) continue;
-      const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
-      char& f = seen[static_cast<std::size_t>(ab) * nz + q.zbin];
-      if (!f) f = 1, ++sup[ab];
+  auto finishScores = [&](HingeRun& w, const std::vector<char>* need) {
+    w.scores.assign(w.count, Score());
+    for (int ai = 0; ai < w.count; ++ai) {
+      Score& out = w.scores[ai];
+      if (need && !(*need)[ai]) {
+        out.score = -std::numeric_limits<double>::infinity();
+        continue;
+      }
+      int acc = 0, cells_seen = 0, contra = 0;
+      for (int i = 0; i < na_max; ++i) {
+        const std::size_t j = static_cast<std::size_t>(ai) * na_max + i;
+        acc += w.sup[j] - 2 * w.con[j];
+        cells_seen += w.sup[j];
+        contra += w.con[j];
+        if (i + 1 >= na_min && acc > out.score) out = {static_cast<double>(acc), cells_seen, contra, i + 1};
+      }
     }
-    const Eigen::Vector2d P = H + k * (lt / 2);  // the leaf's mid-plane
-    for (int j : index.rays[ai]) {
-      const Ray& ray = rays[j];
-      const Eigen::Vector2d r = ray.q - ray.v;
-      const double denom = r.x() * e.y() - r.y() * e.x();
-      if (std::abs(denom) < 1e-9) continue;
-      const Eigen::Vector2d w0 = P - ray.v;
-      const double lam = (w0.x() * e.y() - w0.y() * e.x()) / denom;
-      const double a = (w0.x() * r.y() - w0.y() * r.x()) / denom;
-      if (a < 0.05 || a >= Lmax || lam <= 0 || lam > 1 - 0.06 / ray.len) continue;
-      const double z = ray.vz + lam * (ray.qz - ray.vz);
-      if (z < z0 || z >= z1) continue;
-      const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
-      char& f = blocked[static_cast<std::size_t>(ab) * nz + std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
-      if (!f) f = 1, ++con[ab];
-    }
-    Score out;
-    int acc = 0, cells = 0, contra = 0;
-    for (int i = 0; i < na_max; ++i) {
-      acc += sup[i] - 2 * con[i];
-      cells += sup[i];
-      contra += con[i];
-      if (i + 1 >= na_min && acc > out.score) out = {static_cast<double>(acc), cells, contra, i + 1};
-    }
-    return out;
   };
 
   // Global search: hinge at either jamb, either swing side, hinge on the
-  // face or set back (recess), every degree.
+  // face or set back (recess), every degree. The hinges are scored as tasks
+  // (over the cores), the best taken in order. Support bounds a hypothesis's
+  // score from above (contradiction only lowers it): rays are tested only at
+  // the angles whose bound reaches the exact score of the best-bounded one,
+  // the others cannot be the best.
   std::vector<double> recess_steps;
   for (double r = 0.0; r + lt <= t + 1e-9 && recess_steps.size() < 4; r += 0.05) recess_steps.push_back(r);
-  Score best;
-  int best_h = 0, best_sw = 0;
-  double best_deg = 0, best_recess = 0, best_s = door.s0;
+  struct Hinge {
+    int h, sw;
+    double rec;
+  };
+  std::vector<Hinge> hinges;
   for (int h = 0; h < 2; ++h)
     for (int sw = 0; sw < 2; ++sw)
       for (double rec : recess_steps) {
         if (rec > 0 && rec + lt > t) continue;
-        const double s_h = h == 0 ? door.s0 : door.s1, e0 = h == 0 ? 1.0 : -1.0;
-        const double m = sw == 0 ? 1.0 : -1.0, d_h = sw == 0 ? -rec : -t + rec;
-        // Beyond 170 deg a leaf lies flat on its wall and cannot be told from it.
-        buildIndex(s_h, d_h, e0, m, 0.0, 2.0, 86);  // every 2 deg, refined below
-        for (int ai = 0; ai < index.count; ++ai) {
-          const Score sc = evaluate(s_h, d_h, e0, m, ai);
-          if (sc.score > best.score)
-            best = sc, best_h = h, best_sw = sw, best_deg = 2.0 * ai, best_recess = rec, best_s = s_h;
-        }
+        hinges.push_back({h, sw, rec});
       }
+  std::vector<HingeRun> global(hinges.size());
+  for (std::size_t i = 0; i < hinges.size(); ++i) {
+    const Hinge& g = hinges[i];
+    HingeRun& w = global[i];
+    w.s_h = g.h == 0 ? door.s0 : door.s1, w.e0 = g.h == 0 ? 1.0 : -1.0;
+    w.m = g.sw == 0 ? 1.0 : -1.0, w.d_h = g.sw == 0 ? -g.rec : -t + g.rec;
+    // Beyond 170 deg a leaf lies flat on its wall and cannot be told from it.
+    w.start = 0.0, w.step = 2.0, w.count = 86;  // every 2 deg, refined below
+  }
+  forEachTask(global.size(), [&](std::size_t i) { scorePoints(global[i]); });
+  double lower = -std::numeric_limits<double>::infinity();  // the exact score of one hypothesis
+  if (!global.empty()) {
+    std::size_t bi = 0;
+    int ba = 0, bb = -1;
+    for (std::size_t i = 0; i < global.size(); ++i)
+      for (int ai = 0; ai < global[i].count; ++ai)
+        if (bound(global[i], ai) > bb) bb = bound(global[i], ai), bi = i, ba = ai;
+    HingeRun probe = global[bi];
+    std::vector<char> only(probe.count, 0);
+    only[ba] = 1;
+    scoreRays(probe, &only);
+    finishScores(probe, &only);
+    lower = probe.scores[ba].score;
+  }
+  forEachTask(global.size(), [&](std::size_t i) {
+    HingeRun& w = global[i];
+    std::vector<char> need(w.count, 0);
+    for (int ai = 0; ai < w.count; ++ai) need[ai] = bound(w, ai) >= lower;
+    scoreRays(w, &need);
+    finishScores(w, &need);
+  });
+  Score best;
+  int best_h = 0, best_sw = 0;
+  double best_deg = 0, best_recess = 0, best_s = door.s0;
+  for (std::size_t i = 0; i < hinges.size(); ++i) {
+    const Hinge& g = hinges[i];
+    for (int ai = 0; ai < 86; ++ai) {
+      const Score& sc = global[i].scores[ai];
+      if (sc.score > best.score)
+        best = sc, best_h = g.h, best_sw = g.sw, best_deg = 2.0 * ai, best_recess = g.rec, best_s = g.h == 0 ? door.s0 : door.s1;
+    }
+  }
   // Local search: the jamb seen from the wall can be off where a leaf hides
   // or shadows its own doorway; move the hinge along the wall and the angle.
   {
@@ -283,13 +397,22 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     const double d_h = best_sw == 0 ? -best_recess : -t + best_recess;
     const double s_center = best_s, deg_center = best_deg;
     const int reach_steps = door.paired ? 3 : 15;  // 2 cm steps
+    const double start = deg_center - 2.5, step = 0.5;
+    std::vector<HingeRun> shifts(2 * reach_steps + 1);
+    forEachTask(shifts.size(), [&](std::size_t i) {
+      HingeRun& w = shifts[i];
+      w.s_h = s_center + (static_cast<int>(i) - reach_steps) * 0.02;
+      w.d_h = d_h, w.e0 = e0, w.m = m, w.start = start, w.step = step, w.count = 11;
+      scorePoints(w);
+      scoreRays(w, nullptr);
+      finishScores(w, nullptr);
+    });
     for (int ds = -reach_steps; ds <= reach_steps; ++ds) {
       const double s_h = s_center + ds * 0.02;
-      buildIndex(s_h, d_h, e0, m, deg_center - 2.5, 0.5, 11);
-      for (int ai = 0; ai < index.count; ++ai) {
-        const double deg = index.start + ai * index.step;
+      for (int ai = 0; ai < 11; ++ai) {
+        const double deg = start + ai * step;
         if (deg < 0 || deg > 170) continue;
-        const Score sc = evaluate(s_h, d_h, e0, m, ai);
+        const Score& sc = shifts[ds + reach_steps].scores[ai];
         if (sc.score > best.score) best = sc, best_deg = deg, best_s = s_h;
       }
     }

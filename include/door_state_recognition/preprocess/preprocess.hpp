@@ -28,6 +28,11 @@ Points sanitize(const pcl::PointCloud<pcl::PointXYZ>& cloud, double max_abs);
 // output order is deterministic. leaf <= 0 returns the input.
 Points voxelDownsample(const Points& points, double leaf);
 
+// voxelDownsample(sanitize(cloud, max_abs), leaf) in one pass, without the
+// copy; `kept` (if given) receives the number of points sanitize keeps.
+Points sanitizeAndDownsample(const pcl::PointCloud<pcl::PointXYZ>& cloud, double max_abs, double leaf,
+                             std::size_t* kept = nullptr);
+
 // Estimates the up direction of an unlevelled cloud seen from the origin:
 // the direction most normals are parallel (floor, ceiling) or perpendicular
 // (walls) to, signed so that furniture rests on the floor side. `normals`
