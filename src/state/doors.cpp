@@ -23,6 +23,10 @@ constexpr double kOwnLeafFront = 0.5;
 constexpr double kOwnLeafExplained = 0.6;
 constexpr double kOwnLeafCoverage = 0.6;
 constexpr double kBoxSideDeg = 5.0;
+// The look before the search (mayBeOwnLeaf): the plane's rms (m) and how
+// near a jamb it meets the wall's face (m).
+constexpr double kOwnLeafRms = 0.05;
+constexpr double kOwnLeafJamb = 0.15;
 // A door whose leaf was not seen (its angle a lower bound from free space).
 constexpr double kUnseenLeafConfidence = 0.3;
 // A wall whose inliers are more than this share another door's leaf is that leaf.
@@ -82,6 +86,37 @@ Foot footOf(const segmentation::Points& pts, const segmentation::WallPlane& wall
   return f;
 }
 
+// Could what hides a doorway be its own leaf, swung towards the sensor? A
+// cheap look before the leaf search: the points in front of the wall whose
+// sight lines meet the wall inside the doorway (body height) must lie on one
+// vertical plane (rms within kOwnLeafRms) that meets the wall's face near a
+// jamb and is not square to the wall (a cupboard's side).
+bool mayBeOwnLeaf(const segmentation::Points& pts, const segmentation::WallPlane& wall, const recognition::Doorway& d,
+                  double floor_z, const Eigen::Vector3f& viewpoint, const Parameters& p) {
+  const double vs = wall.along(viewpoint), vd = wall.signedDistance(viewpoint);
+  if (vd <= 0.1) return false;
+  std::vector<Eigen::Vector2d> sd;
+  for (const auto& q : pts) {
+    if (q.z() < floor_z + 0.25 || q.z() > floor_z + 1.75) continue;
+    const double dd = wall.signedDistance(q);
+    if (dd <= p.face_tolerance + 0.02 || dd >= std::min(vd, p.door_max_width + 0.1)) continue;
+    const double ss = wall.along(q);
+    const double s_wall = vs + vd / (vd - dd) * (ss - vs);
+    if (s_wall <= d.s0 + 0.05 || s_wall >= d.s1 - 0.05) continue;
+    sd.emplace_back(ss, dd);
+  }
+  if (sd.size() < 30) return false;
+  const Line2 l = fitLine(sd);
+  double rms = 0;
+  const Eigen::Vector2d nrm(-l.direction.y(), l.direction.x());
+  for (const auto& q : sd) rms += std::pow((q - l.point).dot(nrm), 2);
+  rms = std::sqrt(rms / sd.size());
+  const double angle = std::acos(std::min(1.0, std::abs(l.direction.x()))) * 180 / M_PI;  // to the wall, 0-90
+  if (rms > kOwnLeafRms || std::abs(l.direction.y()) < 1e-6 || 90 - angle < kBoxSideDeg) return false;
+  const double s_face = l.point.x() - l.point.y() / l.direction.y() * l.direction.x();  // where it meets d = 0
+  return std::min(std::abs(s_face - d.s0), std::abs(s_face - d.s1)) <= kOwnLeafJamb;
+}
+
 }  // namespace
 
 DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentation::WallPlane>& walls, double floor_z,
@@ -117,8 +152,8 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
     const recognition::Doorway& d = c.doorway;
     // A doorway hidden by what stands in front of it may be hidden by its own
     // leaf swung towards the sensor: searched too (see the evidence rule).
-    const bool other_evidence =
-        d.casing || d.through >= 0.08 || d.recess > 0.3 || d.set_back > 0 || d.front >= kOwnLeafFront;
+    const bool other_evidence = d.casing || d.through >= 0.08 || d.recess > 0.3 || d.set_back > 0 ||
+                                (d.front >= kOwnLeafFront && mayBeOwnLeaf(pts, walls[c.wall], d, floor_z, viewpoint, p));
     c.leaf = fitLeaf(pts, walls[c.wall], d, floor_z, thicknessOf(d), viewpoint, p,
                             other_evidence ? 0.0 : kClosedBandEvidence, organized ? &view : nullptr);
   });
