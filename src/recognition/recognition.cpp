@@ -522,8 +522,12 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   }
 
   // (3) Panels set back from a noisy face (see setBackPanels), first: a
-  // run of (4) overlapping one of them merges into it.
-  for (const SetBack& sb : setBackPanels(points, wall, floor_z, top_z, d_view, s_lo, cell, col_tol, p)) {
+  // run of (4) overlapping one of them merges into it. Only in camera frames
+  // (no_return_is_free): a laser's face is millimetre-sharp, and the pass
+  // over every point near the wall costs a laser room milliseconds per wall.
+  const std::vector<SetBack> panels =
+      no_return_is_free ? setBackPanels(points, wall, floor_z, top_z, d_view, s_lo, cell, col_tol, p) : std::vector<SetBack>{};
+  for (const SetBack& sb : panels) {
     const std::size_t before = out.size();
     addCandidate(sb.s0, sb.s1, false);
     if (out.size() > before) out.back().set_back = sb.depth;
