@@ -64,6 +64,21 @@ void forEachTask(std::size_t n, const F& f) {
   if (error) std::rethrow_exception(error);
 }
 
+// Where a sensor ray from v (height vz) along r (rising dz over its length)
+// crosses the line P + a e of a leaf's mid-plane: a along the leaf and the
+// height z; false when it does not, or only past lam_max of its length.
+inline bool crossLeaf(const Eigen::Vector2d& v, const Eigen::Vector2d& r, double vz, double dz, double lam_max,
+                      const Eigen::Vector2d& P, const Eigen::Vector2d& e, double& a, double& z) {
+  const double denom = r.x() * e.y() - r.y() * e.x();
+  if (std::abs(denom) < 1e-9) return false;
+  const Eigen::Vector2d w = P - v;
+  const double lam = (w.x() * e.y() - w.y() * e.x()) / denom;
+  a = (w.x() * r.y() - w.y() * r.x()) / denom;
+  if (lam <= 0 || lam > lam_max) return false;
+  z = vz + lam * dz;
+  return true;
+}
+
 struct Local {  // a point in wall coordinates: s along, d towards the viewer
   double s, d;
   int zbin, index;
@@ -279,15 +294,9 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       const Eigen::Vector2d r = ray.q - ray.v;
       auto test = [&](int ai) {
         if (need && !(*need)[ai]) return;
-        const Eigen::Vector2d& e = E[ai];
-        const double denom = r.x() * e.y() - r.y() * e.x();
-        if (std::abs(denom) < 1e-9) return;
-        const Eigen::Vector2d wp = P[ai] - ray.v;
-        const double lam = (wp.x() * e.y() - wp.y() * e.x()) / denom;
-        const double a = (wp.x() * r.y() - wp.y() * r.x()) / denom;
-        if (a < 0.05 || a >= Lmax || lam <= 0 || lam > lam_max) return;
-        const double z = ray.vz + lam * dz;
-        if (z < z0 || z >= z1) return;
+        double a, z;
+        if (!crossLeaf(ray.v, r, ray.vz, dz, lam_max, P[ai], E[ai], a, z) || a < 0.05 || a >= Lmax || z < z0 || z >= z1)
+          return;
         const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
         char& f = blocked[ai * cells + static_cast<std::size_t>(ab) * nz + std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
         if (!f) f = 1, ++w.con[static_cast<std::size_t>(ai) * na_max + ab];
@@ -583,15 +592,10 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
           std::fill(crossed.begin(), crossed.end(), 0);
           int n = 0;
           for (const Ray& ray : rays) {
-            const Eigen::Vector2d r = ray.q - ray.v;
-            const double denom = r.x() * e.y() - r.y() * e.x();
-            if (std::abs(denom) < 1e-9) continue;
-            const Eigen::Vector2d w0 = P - ray.v;
-            const double lam = (w0.x() * e.y() - w0.y() * e.x()) / denom;
-            const double a = (w0.x() * r.y() - w0.y() * r.x()) / denom;
-            if (a < 0.05 || a >= L || lam <= 0 || lam > 1 - 0.06 / ray.len) continue;
-            const double z = ray.vz + lam * (ray.qz - ray.vz);
-            if (z < z0 || z >= z1) continue;
+            double a, z;
+            if (!crossLeaf(ray.v, ray.q - ray.v, ray.vz, ray.qz - ray.vz, 1 - 0.06 / ray.len, P, e, a, z) || a < 0.05 ||
+                a >= L || z < z0 || z >= z1)
+              continue;
             char& f = crossed[static_cast<std::size_t>(std::min(nl - 1, static_cast<int>(a / abin))) * nz +
                               std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
             if (!f) f = 1, ++n;
