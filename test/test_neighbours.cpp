@@ -29,6 +29,28 @@ std::vector<Eigen::Vector3f> randomPoints(unsigned seed, std::size_t n, float ha
   return pts;
 }
 
+// The voxel grid done the obvious way: each voxel's centroid, in the order
+// its first point came.
+std::vector<Eigen::Vector3f> naiveCentroids(const std::vector<Eigen::Vector3f>& pts, double leaf) {
+  std::map<std::tuple<long, long, long>, std::pair<Eigen::Vector3d, int>> cells;
+  std::vector<std::tuple<long, long, long>> order;
+  for (const auto& p : pts) {
+    const auto k = std::make_tuple(static_cast<long>(std::floor(p.x() * (1 / leaf))), static_cast<long>(std::floor(p.y() * (1 / leaf))),
+                                   static_cast<long>(std::floor(p.z() * (1 / leaf))));
+    auto it = cells.find(k);
+    if (it == cells.end()) {
+      cells[k] = {p.cast<double>(), 1};
+      order.push_back(k);
+    } else {
+      it->second.first += p.cast<double>();
+      ++it->second.second;
+    }
+  }
+  std::vector<Eigen::Vector3f> out;
+  for (const auto& k : order) out.push_back((cells[k].first / cells[k].second).cast<float>());
+  return out;
+}
+
 }  // namespace
 
 TEST(CellMap, NumbersKeysInOrderOfFirstInsertionAndFindsThemAfterGrowing) {
@@ -48,26 +70,10 @@ TEST(VoxelGrid, EqualsANaiveCentroidPerVoxelInFirstSeenOrder) {
     // Far from the origin and on both sides of zero (negative cells).
     const auto pts = randomPoints(seed, 20000, 0.5f, seed == 3 ? Eigen::Vector3f(1000, -2000, 5) : Eigen::Vector3f::Zero());
     const double leaf = 0.05;
-    std::map<std::tuple<long, long, long>, std::pair<Eigen::Vector3d, int>> cells;
-    std::vector<std::tuple<long, long, long>> order;
-    for (const auto& p : pts) {
-      const auto k = std::make_tuple(static_cast<long>(std::floor(p.x() * (1 / leaf))), static_cast<long>(std::floor(p.y() * (1 / leaf))),
-                                     static_cast<long>(std::floor(p.z() * (1 / leaf))));
-      auto it = cells.find(k);
-      if (it == cells.end()) {
-        cells[k] = {p.cast<double>(), 1};
-        order.push_back(k);
-      } else {
-        it->second.first += p.cast<double>();
-        ++it->second.second;
-      }
-    }
+    const auto naive = naiveCentroids(pts, leaf);
     const auto out = preprocess::voxelDownsample(pts, leaf);
-    ASSERT_EQ(out.size(), order.size());
-    for (std::size_t i = 0; i < out.size(); ++i) {
-      const auto& c = cells[order[i]];
-      EXPECT_LT((out[i] - (c.first / c.second).cast<float>()).norm(), 1e-3f) << "voxel " << i;
-    }
+    ASSERT_EQ(out.size(), naive.size());
+    for (std::size_t i = 0; i < out.size(); ++i) EXPECT_LT((out[i] - naive[i]).norm(), 1e-3f) << "voxel " << i;
   }
 }
 
@@ -89,26 +95,10 @@ TEST(VoxelGrid, LargeCloudsGiveExactlyTheNaiveCentroidsAndSanitizingInThePassCha
   const double leaf = 0.02, max_abs = 1e4;
   const auto pts = preprocess::sanitize(cloud, max_abs);
   ASSERT_EQ(pts.size(), 400u * 300u);
-  std::map<std::tuple<long, long, long>, std::pair<Eigen::Vector3d, int>> cells;
-  std::vector<std::tuple<long, long, long>> order;
-  for (const auto& p : pts) {
-    const auto k = std::make_tuple(static_cast<long>(std::floor(p.x() * (1 / leaf))), static_cast<long>(std::floor(p.y() * (1 / leaf))),
-                                   static_cast<long>(std::floor(p.z() * (1 / leaf))));
-    auto it = cells.find(k);
-    if (it == cells.end()) {
-      cells[k] = {p.cast<double>(), 1};
-      order.push_back(k);
-    } else {
-      it->second.first += p.cast<double>();
-      ++it->second.second;
-    }
-  }
+  const auto naive = naiveCentroids(pts, leaf);
   const auto out = preprocess::voxelDownsample(pts, leaf);
-  ASSERT_EQ(out.size(), order.size());
-  for (std::size_t i = 0; i < out.size(); ++i) {
-    const auto& c = cells[order[i]];
-    ASSERT_EQ(out[i], (c.first / c.second).cast<float>()) << "voxel " << i;
-  }
+  ASSERT_EQ(out.size(), naive.size());
+  for (std::size_t i = 0; i < out.size(); ++i) ASSERT_EQ(out[i], naive[i]) << "voxel " << i;
   std::size_t kept = 0;
   const auto fused = preprocess::sanitizeAndDownsample(cloud, max_abs, leaf, &kept);
   EXPECT_EQ(kept, pts.size());

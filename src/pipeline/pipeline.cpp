@@ -133,7 +133,7 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   auto onFloor = [&](const Eigen::Vector2d& xy) { return Eigen::Vector3d(xy.x(), xy.y(), floor_z); };
   const Eigen::Matrix3d Rt = R.cast<double>().transpose();
   auto toInput = [&](const Eigen::Vector3d& v) -> Eigen::Vector3d { return Rt * v; };
-  state::DoorStage door_stage = state::findDoors(pts, walls, floor_z, top_z, fc.ceiling.has_value(), viewpoint, Rt, organized, p);
+  state::DoorStage door_stage = state::findDoors(pts, walls, floor_z, top_z, fc.ceiling.has_value(), viewpoint, Rt, organized, p, &view);
   res.doors = std::move(door_stage.doors);
   res.trace.insert(res.trace.end(), door_stage.trace.begin(), door_stage.trace.end());
   const std::vector<char>& is_leaf = door_stage.is_leaf;

@@ -121,7 +121,7 @@ bool mayBeOwnLeaf(const segmentation::Points& pts, const segmentation::WallPlane
 
 DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentation::WallPlane>& walls, double floor_z,
                     double top_z, bool ceiling_known, const Eigen::Vector3f& viewpoint, const Eigen::Matrix3d& to_input,
-                    bool organized, const Parameters& p) {
+                    bool organized, const Parameters& p, const segmentation::ViewTop* view_in) {
   DoorStage out;
   auto toInput = [&](const Eigen::Vector3d& v) -> Eigen::Vector3d { return to_input * v; };
   auto onFloor = [&](const Eigen::Vector2d& xy) { return Eigen::Vector3d(xy.x(), xy.y(), floor_z); };
@@ -139,7 +139,10 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
   };
   // A camera frame's view ends on every side: what a leaf shows is judged
   // against the part of it inside the view.
-  const segmentation::ViewTop view = organized ? segmentation::viewTop(pts, viewpoint) : segmentation::ViewTop{};
+  // (the caller's, when it has one already).
+  const segmentation::ViewTop own =
+      organized && !view_in ? segmentation::viewTop(pts, viewpoint) : segmentation::ViewTop{};
+  const segmentation::ViewTop* view = !organized ? nullptr : view_in ? view_in : &own;
   std::vector<Candidate> candidates;
   for (std::size_t wi = 0; wi < walls.size(); ++wi)
     for (const recognition::Doorway& d : doorways[wi]) candidates.push_back({wi, d, {}});
@@ -155,7 +158,7 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
     const bool other_evidence = d.casing || d.through >= 0.08 || d.recess > 0.3 || d.set_back > 0 ||
                                 (d.front >= kOwnLeafFront && mayBeOwnLeaf(pts, walls[c.wall], d, floor_z, viewpoint, p));
     c.leaf = fitLeaf(pts, walls[c.wall], d, floor_z, thicknessOf(d), viewpoint, p,
-                            other_evidence ? 0.0 : kClosedBandEvidence, organized ? &view : nullptr);
+                            other_evidence ? 0.0 : kClosedBandEvidence, view);
   });
   for (const Candidate& cand : candidates) {
     {

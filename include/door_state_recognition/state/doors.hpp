@@ -26,11 +26,12 @@ struct DoorStage {
 // `top_z` is the ceiling when `ceiling_known`, else the top of the vertical
 // structure seen (then door heights are not judged against it).
 // `to_input` rotates the levelled frame back to the input's. `organized`: a
-// camera frame, where no return in range means free space. Doorways and
+// camera frame, where no return in range means free space; its extent is
+// `view` when the caller has made it (else made here). Doorways and
 // leaves are searched over the cores; decisions follow in wall order.
 DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentation::WallPlane>& walls, double floor_z,
                     double top_z, bool ceiling_known, const Eigen::Vector3f& viewpoint, const Eigen::Matrix3d& to_input,
-                    bool organized, const Parameters& p);
+                    bool organized, const Parameters& p, const segmentation::ViewTop* view = nullptr);
 
 }  // namespace state
 }  // namespace dsr
