@@ -618,8 +618,10 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     // wall whose sight lines, carried on, meet the wall inside the doorway.
     // A leaf swung towards the sensor is all of it; a cupboard's side taken
     // for a leaf leaves its front unexplained.
-    std::vector<char> is_inlier(points.size(), 0);
-    for (int i : fit.inliers) is_inlier[i] = 1;
+    // On the leaf: within its thickness either side of the hinge line (the
+    // face seen may be either, and a recess the search missed shifts it).
+    const double th = fit.angle_deg * M_PI / 180;
+    const Eigen::Vector2d e(std::cos(th) * e0, std::sin(th) * m), k(std::sin(th) * e0, -std::cos(th) * m);
     int occluders = 0, explained = 0;
     for (const Local& q : pts) {
       if (q.d <= p.face_tolerance + 0.02 || q.d >= vsd.y()) continue;
@@ -627,7 +629,9 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       const double s_wall = vsd.x() + lam * (q.s - vsd.x());
       if (s_wall <= door.s0 + 0.05 || s_wall >= door.s1 - 0.05) continue;
       ++occluders;
-      explained += is_inlier[q.index];
+      const Eigen::Vector2d r(q.s - s_h, q.d - d_h);
+      const double a = r.dot(e), b = r.dot(k);
+      explained += a >= 0.02 && a <= fit.length && b >= -lt - tol && b <= lt + tol;
     }
     fit.occluders_explained = occluders > 0 ? static_cast<double>(explained) / occluders : 0.0;
   }
