@@ -190,6 +190,10 @@ std::vector<SetBack> setBackPanels(const Points& points, const segmentation::Wal
 
 }  // namespace
 
+// A run wider than a door, this share of whose unseen cells lie in the
+// shadow of something in front: maybe a leaf's shadow over its doorway.
+constexpr double kShadowRun = 0.8;
+
 std::vector<Doorway> findDoorways(const Points& points, const segmentation::WallPlane& wall, double floor_z,
                                   double top_z, const Eigen::Vector3f& viewpoint, const Parameters& p,
                                   bool no_return_is_free) {
@@ -518,6 +522,26 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       s1 = right[right.size() * 3 / 100];
     }
     addCandidate(s0, s1, false);
+    // A run wider than any door, hidden from the sensor by something in
+    // front: a leaf swung towards the sensor shadows its doorway and the wall
+    // beyond it. Its hinge jamb is the run's end nearer the sensor; the
+    // doorway from there, a widest door long, is left to the leaf search
+    // (which takes it only if the leaf is what hides it).
+    if (s1 - s0 > p.door_max_width + 0.1 && d_view > 0.1) {
+      int fr = 0, ex = 0;
+      for (int k = lo; k <= hi; ++k)
+        for (int r = body0; r < body1; ++r) {
+          const Cell& g = grid[static_cast<std::size_t>(r) * cols + k];
+          if (g.face) continue;
+          ex += g.through || g.front || g.recess;
+          fr += g.front && !g.through && !g.recess;
+        }
+      const double vs = wall.along(viewpoint);
+      if (ex > 0 && fr >= kShadowRun * ex) {
+        if (vs < s0) addCandidate(s0, s0 + p.door_max_width, false);
+        else if (vs > s1) addCandidate(s1 - p.door_max_width, s1, false);
+      }
+    }
     c = e + 1;
   }
 
