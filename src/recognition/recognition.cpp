@@ -637,10 +637,14 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       d.recess = static_cast<double>(re) / n;
     }
     d.top = std::numeric_limits<double>::quiet_NaN();
+    // The head: the first row above the body where the wall's face spans the
+    // doorway, clearly more of it than the body's own face share (a leaf
+    // closed a few centimetres behind the face shows in part within it).
+    const double head_share = std::clamp(d.face + 0.3, 0.5, 0.9);
     for (int r = body1; r < rows && c1 >= c0; ++r) {
       int rf = 0;
       for (int c = c0; c <= c1; ++c) rf += grid[static_cast<std::size_t>(r) * cols + c].face > 0;
-      if (rf >= 0.5 * (c1 - c0 + 1) && (d.face < 0.5 || r * row_h > 1.9)) {
+      if (rf >= head_share * (c1 - c0 + 1) && (d.face < 0.5 || r * row_h > 1.9)) {
         d.top = floor_z + r * row_h;
         break;
       }
