@@ -537,9 +537,11 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
           fr += g.front && !g.through && !g.recess;
         }
       const double vs = wall.along(viewpoint);
-      if (ex > 0 && fr >= kShadowRun * ex) {
+      if (ex > 0 && fr >= kShadowRun * ex && (vs < s0 || vs > s1)) {
+        const std::size_t before = out.size();
         if (vs < s0) addCandidate(s0, s0 + p.door_max_width, false);
-        else if (vs > s1) addCandidate(s1 - p.door_max_width, s1, false);
+        else addCandidate(s1 - p.door_max_width, s1, false);
+        if (out.size() > before) out.back().shadow_end = true;
       }
     }
     c = e + 1;
@@ -581,7 +583,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     // other leg may hide behind a leaf swung towards the sensor, and a leaf
     // ajar hides its own doorway near the hinge; the head spans the doorway
     // from leg to leg, so the doorway is snapped to it.
-    if (!d.casing)
+    if (!d.casing && !d.shadow_end)
       for (const auto& leg : legs) {
         const double inner_right = subS(leg.second + 1), inner_left = subS(leg.first);
         if ((std::abs(inner_right - d.s0) < 0.12 || std::abs(inner_left - d.s1) < 0.12) && hasHead(d.s0, d.s1)) {

@@ -209,7 +209,8 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       // A panel set back from the wall around it must lie off the wall's
       // plane over a good part of its body too.
       const bool set_back = d.set_back > 0 && d.recess + d.through >= 0.3;
-      const bool evidence = leaf.closed_in_band
+      const bool evidence = d.shadow_end ? own_leaf_hides
+                            : leaf.closed_in_band
                                 ? (d.casing || d.recess > 0.3 || set_back || leaf.coverage > kClosedBandEvidence)
                                 : (d.casing || d.through >= 0.08 || own_leaf_hides);
       // A closed leaf (found in the wall band or swung by less than

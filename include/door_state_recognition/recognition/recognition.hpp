@@ -44,6 +44,10 @@ struct Doorway {
   double face = 0, through = 0, front = 0, recess = 0;  // shares of body cells, see findDoorways
   double thickness = 0;    // wall thickness seen at the jambs (0: unknown)
   double set_back = 0;     // found as a panel this far behind the wall above and beside it (0: not so found)
+  // Found only as the sensor-near end of a shadow wider than any door (a
+  // leaf swung towards the sensor): its far jamb is a guess, and only that
+  // leaf, hiding it, can make it a door (no trim is snapped to it).
+  bool shadow_end = false;
   double width() const { return s1 - s0; }
 };
 
@@ -57,7 +61,8 @@ struct Doorway {
 // wall. Where the face is too noisy for either (a depth camera at range),
 // runs of columns whose body lies well behind the same columns' wall above
 // a door's head, level with it again on both sides, form doorways too
-// (set_back). Candidates are door_min_width..door_max_width wide.
+// (set_back). Candidates are door_min_width..door_max_width wide; a shadow
+// wider than any door gives one from its end nearer the sensor (shadow_end).
 // no_return_is_free: the cloud is an organized camera frame, where a body
 // cell of a doorway without any return means nothing was there in range
 // (counted as seen through).
