@@ -421,6 +421,33 @@ TEST(DoorState, AnUnseenLeafInADoorwaySeenThroughIsOpenByAtLeastTheFreeSpaceBoun
   }
 }
 
+TEST(DoorState, ALeafThatWouldBeSeenEdgeOnIsRuledOutByTheRangeImage) {
+  // Laser rooms (the sweep's seeds) with a door open past 90 deg, its leaf
+  // behind the wall out of sight. Few rays cross a leaf hypothesis seen
+  // nearly edge-on, so counting crossings left it possible and kept the
+  // bound below 90 deg; the nearest return in each bin of bearing and
+  // elevation shows the wall or the room beyond where such a leaf would
+  // stand, which rules it out. The bound then says open (by at least it).
+  for (const auto& [seed, door] : {std::pair<std::uint64_t, int>{1021, 0}, {2028, 0}}) {
+    const Scored s = runScene(sim::randomRoom(seed), seed, "tls");
+    SCOPED_TRACE(::testing::Message() << "seed=" << seed << " " << describe(s) << trace(s));
+    EXPECT_EQ(s.eval.reported_doors, s.eval.matched);
+    const double truth = s.truth["doors"][door]["opening_angle_deg"].get<double>();
+    ASSERT_GE(truth, 90.0);
+    bool found = false;
+    for (const auto& m : s.eval.matches)
+      if (m.truth_index == door) {
+        found = true;
+        const DoorResult& d = s.result.doors.at(static_cast<std::size_t>(m.report_index));
+        EXPECT_TRUE(d.angle_is_lower_bound);
+        EXPECT_EQ(d.state, DoorStateKind::Open);
+        EXPECT_GE(d.opening_angle_deg, 90.0);
+        EXPECT_LE(d.opening_angle_deg, truth + 2.0);  // a bound from below (2 deg steps)
+      }
+    EXPECT_TRUE(found);
+  }
+}
+
 TEST(DoorState, CameraFramesFindTheDoorInView) {
   // 12 simulated 640x480 RGB-D frames (camera optical frame, up -y, no
   // ceiling in view), the camera looking at one door of a random room. Held at

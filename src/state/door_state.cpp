@@ -79,6 +79,51 @@ inline bool crossLeaf(const Eigen::Vector2d& v, const Eigen::Vector2d& r, double
   return true;
 }
 
+// Free space as a range image: the nearest return in each bin of bearing and
+// elevation seen from the sensor (in wall coordinates: s along, d towards
+// the viewer). A surface at a point nearer than the nearest return of the
+// point's bin (by more than kFreeMargin) would have been seen there instead:
+// the point is free. Unlike counting the rays that cross a leaf, this rules
+// out a leaf seen edge-on, which few rays cross though every bin it would
+// fill shows the wall or the room beyond it.
+constexpr double kRangeBinDeg = 0.5, kFreeMargin = 0.06;
+class RangeImage {
+ public:
+  RangeImage(const Eigen::Vector2d& v, double vz, double az0) : v_(v), vz_(vz), az0_(az0) {
+    near_.assign(static_cast<std::size_t>(kAz) * kEl, std::numeric_limits<float>::infinity());
+  }
+  void add(const Eigen::Vector2d& q, double qz) {
+    double r;
+    const int b = bin(q, qz, r);
+    if (b >= 0) near_[b] = std::min(near_[b], static_cast<float>(r));
+  }
+  // The point is free: its bin holds a return farther than it by kFreeMargin.
+  bool free(const Eigen::Vector2d& q, double qz) const {
+    double r;
+    const int b = bin(q, qz, r);
+    return b >= 0 && std::isfinite(near_[b]) && near_[b] > r + kFreeMargin;
+  }
+
+ private:
+  static constexpr int kAz = static_cast<int>(360 / kRangeBinDeg), kEl = static_cast<int>(180 / kRangeBinDeg);
+  int bin(const Eigen::Vector2d& q, double qz, double& range) const {
+    const Eigen::Vector2d r = q - v_;
+    const double h = r.norm(), dz = qz - vz_;
+    range = std::hypot(h, dz);
+    if (range < 1e-6) return -1;
+    double az = std::atan2(r.y(), r.x()) - az0_;  // relative to the doorway's bearing: no wrap near it
+    if (az < -M_PI) az += 2 * M_PI;
+    if (az >= M_PI) az -= 2 * M_PI;
+    const double el = std::atan2(dz, h);
+    const int a = std::clamp(static_cast<int>((az + M_PI) * 180 / M_PI / kRangeBinDeg), 0, kAz - 1);
+    const int e = std::clamp(static_cast<int>((el + M_PI / 2) * 180 / M_PI / kRangeBinDeg), 0, kEl - 1);
+    return e * kAz + a;
+  }
+  Eigen::Vector2d v_;
+  double vz_, az0_;
+  std::vector<float> near_;
+};
+
 struct Local {  // a point in wall coordinates: s along, d towards the viewer
   double s, d;
   int zbin, index;
@@ -581,6 +626,18 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     const int nl = std::max(1, static_cast<int>(std::ceil(L / abin)));
     std::vector<char> crossed(static_cast<std::size_t>(nl) * nz);
     double bound = 180;
+    // Every return near the doorway (the rays above may be thinned).
+    const Eigen::Vector2d dcv = dc - vsd;
+    RangeImage image(vsd, viewpoint.z(), std::atan2(dcv.y(), dcv.x()));
+    for (const auto& q : points) {
+      const Eigen::Vector2d qsd(wall.along(q), wall.signedDistance(q));
+      const Eigen::Vector2d r = qsd - vsd;
+      const double len2 = r.squaredNorm();
+      if (len2 < 1e-6) continue;
+      const double lam = std::clamp((dc - vsd).dot(r) / len2, 0.0, 1.0);
+      if ((vsd + lam * r - dc).norm() > reach + Lmax) continue;
+      image.add(qsd, q.z());
+    }
     for (int h = 0; h < 2; ++h)
       for (int sw = 0; sw < 2; ++sw) {
         const double sh = h == 0 ? door.s0 : door.s1, ee = h == 0 ? 1.0 : -1.0, mm = sw == 0 ? 1.0 : -1.0;
@@ -600,6 +657,13 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
                               std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
             if (!f) f = 1, ++n;
           }
+          // Cells no ray crossed whose centre the range image shows free
+          // (until the leaf is ruled out).
+          for (int i = 0; i < nl && n <= 0.03 * nl * nz; ++i)
+            for (int zb = 0; zb < nz; ++zb) {
+              char& f = crossed[static_cast<std::size_t>(i) * nz + zb];
+              if (!f && image.free(P + e * ((i + 0.5) * abin), z0 + (zb + 0.5) * zbin)) f = 1, ++n;
+            }
           if (n <= 0.03 * nl * nz) {
             if (deg < bound) {
               bound = deg;
