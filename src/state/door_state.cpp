@@ -396,10 +396,15 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     double rec;
   };
   std::vector<Hinge> hinges;
+  // A doorway sought from the end of a shadow wider than a door nearer the
+  // sensor (Doorway::shadow_end) is there only as the leaf hinged at that
+  // end and swung towards the sensor.
+  const int shadow_h = std::abs(vsd.x() - door.s0) < std::abs(vsd.x() - door.s1) ? 0 : 1;
   for (int h = 0; h < 2; ++h)
     for (int sw = 0; sw < 2; ++sw)
       for (double rec : recess_steps) {
         if (rec > 0 && rec + lt > t) continue;
+        if (door.shadow_end && (h != shadow_h || sw != 0)) continue;
         hinges.push_back({h, sw, rec});
       }
   std::vector<HingeRun> global(hinges.size());
