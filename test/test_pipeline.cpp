@@ -355,6 +355,28 @@ TEST(DoorState, AStrayTrimLegOnAFlushLeafDoesNotNarrowItsDoorway) {
   EXPECT_TRUE(found);
 }
 
+TEST(DoorState, ALeafSwungTowardsTheSensorIsSoughtDeeperThanAThinMeasuredWall) {
+  // Seed 3006, door 0: 53 deg towards the scanner, hinged 14 cm behind the
+  // face of a wall whose jambs, seen in part, measure 5 cm thick. With
+  // recesses only up to the measured thickness no hypothesis stood where
+  // the leaf does; a leaf swung towards the sensor is sought as deep as the
+  // default wall thickness.
+  const std::uint64_t seed = 3006;
+  const Scored s = runScene(sim::randomRoom(seed), seed, "tls");
+  SCOPED_TRACE(::testing::Message() << "seed=" << seed << " " << describe(s) << trace(s));
+  ASSERT_GT(s.truth["doors"][0]["recess"].get<double>(), 0.1);
+  EXPECT_EQ(s.eval.reported_doors, s.eval.matched);
+  bool found = false;
+  for (const auto& m : s.eval.matches)
+    if (m.truth_index == 0) {
+      found = true;
+      EXPECT_TRUE(m.state_correct);
+      EXPECT_LT(m.angle_error_deg, 3.0);
+      EXPECT_LT(m.hinge_error_m, 0.1);
+    }
+  EXPECT_TRUE(found);
+}
+
 TEST(DoorState, PaperScenesGetThePapersStates) {
   // Table 4 of the paper: livingroom 1 closed; house 1 open (110.6 deg);
   // multiple doors 2 semi-open (7.2 and 25.3 deg). Counts and states as the

@@ -389,8 +389,13 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   // score from above (contradiction only lowers it): rays are tested only at
   // the angles whose bound reaches the exact score of the best-bounded one,
   // the others cannot be the best.
+  // A leaf swung towards the sensor hangs at its recess behind the face,
+  // which jambs seen only in part can put deeper than the wall measured
+  // there: its recesses go to the default wall thickness at least. Not in
+  // a camera frame, whose depth noise a deeper hinge line fits as well.
+  const double t_toward = view ? t : std::max(t, p.default_wall_thickness);
   std::vector<double> recess_steps;
-  for (double r = 0.0; r + lt <= t + 1e-9 && recess_steps.size() < 4; r += 0.05) recess_steps.push_back(r);
+  for (double r = 0.0; r + lt <= t_toward + 1e-9 && recess_steps.size() < 4; r += 0.05) recess_steps.push_back(r);
   struct Hinge {
     int h, sw;
     double rec;
@@ -403,7 +408,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   for (int h = 0; h < 2; ++h)
     for (int sw = 0; sw < 2; ++sw)
       for (double rec : recess_steps) {
-        if (rec > 0 && rec + lt > t) continue;
+        if (rec > 0 && rec + lt > (sw == 0 ? t_toward : t)) continue;
         if (door.shadow_end && (h != shadow_h || sw != 0)) continue;
         hinges.push_back({h, sw, rec});
       }
