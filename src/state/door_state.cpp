@@ -648,42 +648,46 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       if ((vsd + lam * r - dc).norm() > reach + Lmax) continue;
       image.add(qsd, q.z());
     }
+    // Every hinge, swing side and recess the search tried: a leaf hinged
+    // deeper in its doorway than the hypothesis would rule it out wrongly.
     for (int h = 0; h < 2; ++h)
-      for (int sw = 0; sw < 2; ++sw) {
-        const double sh = h == 0 ? door.s0 : door.s1, ee = h == 0 ? 1.0 : -1.0, mm = sw == 0 ? 1.0 : -1.0;
-        const Eigen::Vector2d H(sh, sw == 0 ? 0.0 : -t);
-        for (int deg = 0; deg < bound && deg <= 170; deg += 2) {
-          const double th = deg * M_PI / 180;
-          const Eigen::Vector2d e(std::cos(th) * ee, std::sin(th) * mm), k(std::sin(th) * ee, -std::cos(th) * mm);
-          const Eigen::Vector2d P = H + k * (lt / 2);
-          std::fill(crossed.begin(), crossed.end(), 0);
-          int n = 0;
-          for (const Ray& ray : rays) {
-            double a, z;
-            if (!crossLeaf(ray.v, ray.q - ray.v, ray.vz, ray.qz - ray.vz, 1 - 0.06 / ray.len, P, e, a, z) || a < 0.05 ||
-                a >= L || z < z0 || z >= z1)
-              continue;
-            char& f = crossed[static_cast<std::size_t>(std::min(nl - 1, static_cast<int>(a / abin))) * nz +
-                              std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
-            if (!f) f = 1, ++n;
-          }
-          // Cells no ray crossed whose centre the range image shows free
-          // (until the leaf is ruled out).
-          for (int i = 0; i < nl && n <= 0.03 * nl * nz; ++i)
-            for (int zb = 0; zb < nz; ++zb) {
-              char& f = crossed[static_cast<std::size_t>(i) * nz + zb];
-              if (!f && image.free(P + e * ((i + 0.5) * abin), z0 + (zb + 0.5) * zbin)) f = 1, ++n;
+      for (int sw = 0; sw < 2; ++sw)
+        for (double rec : recess_steps) {
+          if (rec > 0 && rec + lt > (sw == 0 ? t_toward : t)) continue;
+          const double sh = h == 0 ? door.s0 : door.s1, ee = h == 0 ? 1.0 : -1.0, mm = sw == 0 ? 1.0 : -1.0;
+          const Eigen::Vector2d H(sh, sw == 0 ? -rec : -t + rec);
+          for (int deg = 0; deg < bound && deg <= 170; deg += 2) {
+            const double th = deg * M_PI / 180;
+            const Eigen::Vector2d e(std::cos(th) * ee, std::sin(th) * mm), k(std::sin(th) * ee, -std::cos(th) * mm);
+            const Eigen::Vector2d P = H + k * (lt / 2);
+            std::fill(crossed.begin(), crossed.end(), 0);
+            int n = 0;
+            for (const Ray& ray : rays) {
+              double a, z;
+              if (!crossLeaf(ray.v, ray.q - ray.v, ray.vz, ray.qz - ray.vz, 1 - 0.06 / ray.len, P, e, a, z) || a < 0.05 ||
+                  a >= L || z < z0 || z >= z1)
+                continue;
+              char& f = crossed[static_cast<std::size_t>(std::min(nl - 1, static_cast<int>(a / abin))) * nz +
+                                std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
+              if (!f) f = 1, ++n;
             }
-          if (n <= 0.03 * nl * nz) {
-            if (deg < bound) {
-              bound = deg;
-              fit.hinge_at_s0 = h == 0;
-              fit.toward_viewer = sw == 0;
+            // Cells no ray crossed whose centre the range image shows free
+            // (until the leaf is ruled out).
+            for (int i = 0; i < nl && n <= 0.03 * nl * nz; ++i)
+              for (int zb = 0; zb < nz; ++zb) {
+                char& f = crossed[static_cast<std::size_t>(i) * nz + zb];
+                if (!f && image.free(P + e * ((i + 0.5) * abin), z0 + (zb + 0.5) * zbin)) f = 1, ++n;
+              }
+            if (n <= 0.03 * nl * nz) {
+              if (deg < bound) {
+                bound = deg;
+                fit.hinge_at_s0 = h == 0;
+                fit.toward_viewer = sw == 0;
+              }
+              break;
             }
-            break;
           }
         }
-      }
     fit.free_from_deg = bound;
   }
   if (!fit.found) return fit;
