@@ -661,8 +661,16 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
             const Eigen::Vector2d e(std::cos(th) * ee, std::sin(th) * mm), k(std::sin(th) * ee, -std::cos(th) * mm);
             const Eigen::Vector2d P = H + k * (lt / 2);
             std::fill(crossed.begin(), crossed.end(), 0);
+            // Cells whose centre the range image shows free first (cheap),
+            // then cells rays cross, until the leaf is ruled out.
+            const double most = 0.03 * nl * nz;
             int n = 0;
-            for (const Ray& ray : rays) {
+            for (int i = 0; i < nl && n <= most; ++i)
+              for (int zb = 0; zb < nz; ++zb)
+                if (image.free(P + e * ((i + 0.5) * abin), z0 + (zb + 0.5) * zbin))
+                  crossed[static_cast<std::size_t>(i) * nz + zb] = 1, ++n;
+            for (std::size_t ri = 0; ri < rays.size() && n <= most; ++ri) {
+              const Ray& ray = rays[ri];
               double a, z;
               if (!crossLeaf(ray.v, ray.q - ray.v, ray.vz, ray.qz - ray.vz, 1 - 0.06 / ray.len, P, e, a, z) || a < 0.05 ||
                   a >= L || z < z0 || z >= z1)
@@ -671,13 +679,6 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
                                 std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
               if (!f) f = 1, ++n;
             }
-            // Cells no ray crossed whose centre the range image shows free
-            // (until the leaf is ruled out).
-            for (int i = 0; i < nl && n <= 0.03 * nl * nz; ++i)
-              for (int zb = 0; zb < nz; ++zb) {
-                char& f = crossed[static_cast<std::size_t>(i) * nz + zb];
-                if (!f && image.free(P + e * ((i + 0.5) * abin), z0 + (zb + 0.5) * zbin)) f = 1, ++n;
-              }
             if (n <= 0.03 * nl * nz) {
               if (deg < bound) {
                 bound = deg;
