@@ -215,6 +215,13 @@ TEST(Segmentation, FloorCeilingAndWallsOfASimulatedRoom) {
 
 // ----------------------------------------------------------------- door states
 
+// The match of truth door `door` in a scored scene, or null when it was missed.
+const eval::DoorMatch* matchOf(const Scored& s, int door) {
+  for (const auto& m : s.eval.matches)
+    if (m.truth_index == door) return &m;
+  return nullptr;
+}
+
 TEST(DoorState, AnglesOfSingleDoorsBothSidesBothHinges) {
   // Leaves the scanner can see: towards it at any angle, away from it up to
   // the angle where the jamb starts to hide the leaf.
@@ -296,14 +303,13 @@ TEST(DoorState, ALeafSwungTowardsTheSensorIsTakenOnTheFaceItShowsAndFromAShadowW
     ASSERT_GT(static_cast<int>(s.truth["doors"].size()), door);
     EXPECT_EQ(s.truth["doors"][door]["swing"], "toward_viewer");
     EXPECT_EQ(s.eval.reported_doors, s.eval.matched);  // nothing extra
-    bool found = false;
-    for (const auto& m : s.eval.matches)
-      if (m.truth_index == door) {
-        found = true;
-        EXPECT_TRUE(m.state_correct);
-        EXPECT_LT(m.angle_error_deg, 3.0);
-      }
-    EXPECT_TRUE(found);
+    const eval::DoorMatch* m = matchOf(s, door);
+    if (!m) {
+      ADD_FAILURE() << "door " << door << " missed";
+      continue;
+    }
+    EXPECT_TRUE(m->state_correct);
+    EXPECT_LT(m->angle_error_deg, 3.0);
   }
 }
 
@@ -320,13 +326,9 @@ TEST(DoorState, AClosedLeafJustBehindTheFaceDoesNotLowerItsDoorsHead) {
   ASSERT_GE(s.truth["doors"].size(), 1u);
   ASSERT_EQ(s.truth["doors"][0]["state"], "closed");
   EXPECT_EQ(s.eval.reported_doors, s.eval.matched);
-  bool found = false;
-  for (const auto& m : s.eval.matches)
-    if (m.truth_index == 0) {
-      found = true;
-      EXPECT_TRUE(m.state_correct);
-    }
-  EXPECT_TRUE(found);
+  const eval::DoorMatch* m = matchOf(s, 0);
+  ASSERT_NE(m, nullptr);
+  EXPECT_TRUE(m->state_correct);
   double height = 0;
   for (const auto& d : s.result.doors)
     if (d.state == DoorStateKind::Closed) height = std::max(height, d.height);
@@ -344,15 +346,11 @@ TEST(DoorState, AStrayTrimLegOnAFlushLeafDoesNotNarrowItsDoorway) {
   SCOPED_TRACE(::testing::Message() << "seed=" << seed << " " << describe(s) << trace(s));
   ASSERT_EQ(s.truth["doors"][0]["state"], "closed");
   EXPECT_EQ(s.eval.reported_doors, s.eval.matched);
-  bool found = false;
-  for (const auto& m : s.eval.matches)
-    if (m.truth_index == 0) {
-      found = true;
-      EXPECT_TRUE(m.state_correct);
-      const DoorResult& d = s.result.doors.at(static_cast<std::size_t>(m.report_index));
-      EXPECT_NEAR(d.width, s.truth["doors"][0]["width"].get<double>(), 0.08);
-    }
-  EXPECT_TRUE(found);
+  const eval::DoorMatch* m = matchOf(s, 0);
+  ASSERT_NE(m, nullptr);
+  EXPECT_TRUE(m->state_correct);
+  const DoorResult& d = s.result.doors.at(static_cast<std::size_t>(m->report_index));
+  EXPECT_NEAR(d.width, s.truth["doors"][0]["width"].get<double>(), 0.08);
 }
 
 TEST(DoorState, ALeafSwungTowardsTheSensorIsSoughtDeeperThanAThinMeasuredWall) {
@@ -366,15 +364,11 @@ TEST(DoorState, ALeafSwungTowardsTheSensorIsSoughtDeeperThanAThinMeasuredWall) {
   SCOPED_TRACE(::testing::Message() << "seed=" << seed << " " << describe(s) << trace(s));
   ASSERT_GT(s.truth["doors"][0]["recess"].get<double>(), 0.1);
   EXPECT_EQ(s.eval.reported_doors, s.eval.matched);
-  bool found = false;
-  for (const auto& m : s.eval.matches)
-    if (m.truth_index == 0) {
-      found = true;
-      EXPECT_TRUE(m.state_correct);
-      EXPECT_LT(m.angle_error_deg, 3.0);
-      EXPECT_LT(m.hinge_error_m, 0.1);
-    }
-  EXPECT_TRUE(found);
+  const eval::DoorMatch* m = matchOf(s, 0);
+  ASSERT_NE(m, nullptr);
+  EXPECT_TRUE(m->state_correct);
+  EXPECT_LT(m->angle_error_deg, 3.0);
+  EXPECT_LT(m->hinge_error_m, 0.1);
 }
 
 TEST(DoorState, PaperScenesGetThePapersStates) {
@@ -481,17 +475,16 @@ TEST(DoorState, ALeafThatWouldBeSeenEdgeOnIsRuledOutByTheRangeImage) {
     EXPECT_EQ(s.eval.reported_doors, s.eval.matched);
     const double truth = s.truth["doors"][door]["opening_angle_deg"].get<double>();
     ASSERT_GE(truth, 90.0);
-    bool found = false;
-    for (const auto& m : s.eval.matches)
-      if (m.truth_index == door) {
-        found = true;
-        const DoorResult& d = s.result.doors.at(static_cast<std::size_t>(m.report_index));
-        EXPECT_TRUE(d.angle_is_lower_bound);
-        EXPECT_EQ(d.state, DoorStateKind::Open);
-        EXPECT_GE(d.opening_angle_deg, 90.0);
-        EXPECT_LE(d.opening_angle_deg, truth + 2.0);  // a bound from below (2 deg steps)
-      }
-    EXPECT_TRUE(found);
+    const eval::DoorMatch* m = matchOf(s, door);
+    if (!m) {
+      ADD_FAILURE() << "door " << door << " missed";
+      continue;
+    }
+    const DoorResult& d = s.result.doors.at(static_cast<std::size_t>(m->report_index));
+    EXPECT_TRUE(d.angle_is_lower_bound);
+    EXPECT_EQ(d.state, DoorStateKind::Open);
+    EXPECT_GE(d.opening_angle_deg, 90.0);
+    EXPECT_LE(d.opening_angle_deg, truth + 2.0);  // a bound from below (2 deg steps)
   }
 }
 
