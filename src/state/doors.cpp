@@ -229,14 +229,15 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       // A panel set back from the wall around it must lie off the wall's
       // plane over a good part of its body too.
       const bool set_back = d.set_back > 0 && d.recess + d.through >= 0.3;
-      const bool evidence = d.shadow_end ? own_leaf_hides
-                            : leaf.closed_in_band
-                                ? (d.casing || d.recess > 0.3 || set_back || leaf.coverage > kClosedBandEvidence)
-                                : (d.casing || d.through >= 0.08 || own_leaf_hides);
-      // A closed leaf (found in the wall band or swung by less than
-      // closed_below_deg) whose foot is hidden by something standing right
-      // in front of it is a blocked front, not a door.
+      // A closed leaf: found in the wall band, or swung by less than
+      // closed_below_deg (a band seen too sparsely, far off, to be taken as
+      // one whole).
       const bool closed = leaf.closed_in_band || leaf.angle_deg < p.closed_below_deg;
+      const bool evidence = d.shadow_end ? own_leaf_hides
+                            : closed ? (d.casing || d.recess > 0.3 || set_back || leaf.coverage > kClosedBandEvidence)
+                                     : (d.casing || d.through >= 0.08 || own_leaf_hides);
+      // A closed leaf whose foot is hidden by something standing right in
+      // front of it is a blocked front, not a door.
       const Foot foot = closed ? footOf(pts, wall, leaf, floor_z, p.leaf_thickness, p.face_tolerance) : Foot{1, 0};
       const bool free_foot = foot.seen >= 0.3 || foot.blocked < 0.5;
       const double height = (std::isfinite(d.top) ? d.top : leaf.top_z) - floor_z;
