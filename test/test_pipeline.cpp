@@ -371,22 +371,6 @@ TEST(DoorState, ALeafSwungTowardsTheSensorIsSoughtDeeperThanAThinMeasuredWall) {
   EXPECT_LT(m->hinge_error_m, 0.1);
 }
 
-TEST(DoorState, TheWallRoundACornerIsNoLeaf) {
-  // Seed 4001, door 0: closed (1.2 deg), 0.8 m wide, recessed 8 cm, its
-  // doorway found running on to the room's corner. The wall round the
-  // corner stood in the leaf search like a leaf at 90 deg (coverage 1.0),
-  // and the door was refused for its width. Points on the face of another
-  // wall clearly longer than a door support no leaf.
-  const std::uint64_t seed = 4001;
-  const Scored s = runScene(sim::randomRoom(seed), seed, "tls");
-  SCOPED_TRACE(::testing::Message() << "seed=" << seed << " " << describe(s) << trace(s));
-  EXPECT_EQ(s.eval.reported_doors, s.eval.matched);
-  const eval::DoorMatch* m = matchOf(s, 0);
-  ASSERT_NE(m, nullptr);
-  EXPECT_TRUE(m->state_correct);
-  EXPECT_LT(m->angle_error_deg, 3.0);
-}
-
 TEST(DoorState, PaperScenesGetThePapersStates) {
   // Table 4 of the paper: livingroom 1 closed; house 1 open (110.6 deg);
   // multiple doors 2 semi-open (7.2 and 25.3 deg). Counts and states as the

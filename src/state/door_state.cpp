@@ -133,8 +133,7 @@ struct Local {  // a point in wall coordinates: s along, d towards the viewer
 
 LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlane& wall,
                 const recognition::Doorway& door, double floor_z, double t, const Eigen::Vector3f& viewpoint,
-                const Parameters& p, double closed_band_only_above, const segmentation::ViewTop* view,
-                const std::vector<char>* other_wall) {
+                const Parameters& p, double closed_band_only_above, const segmentation::ViewTop* view) {
   LeafFit fit;
   const double w = door.width(), L = std::max(0.1, w - 0.008), lt = p.leaf_thickness, tol = p.leaf_tolerance;
   const double z0 = floor_z + 0.25;
@@ -162,7 +161,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   std::vector<Local> pts, band;
   for (std::size_t i = 0; i < points.size(); ++i) {
     const auto& q = points[i];
-    if (q.z() < z0 || q.z() >= z1 || (other_wall && (*other_wall)[i])) continue;
+    if (q.z() < z0 || q.z() >= z1) continue;
     const double s = wall.along(q), d = wall.signedDistance(q);
     if (!nearJamb(s, d)) continue;
     const int zb = std::min(nz - 1, static_cast<int>((q.z() - z0) / zbin));

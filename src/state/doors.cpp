@@ -31,10 +31,6 @@ constexpr double kOwnLeafJamb = 0.15;
 constexpr double kUnseenLeafConfidence = 0.3;
 // A wall whose inliers are more than this share another door's leaf is that leaf.
 constexpr double kLeafWallShare = 0.3;
-// A point this near (m) the plane of a wall longer than any door by
-// kOtherWallLonger (m) is that wall's (a camera frame without a ceiling
-// may take an open leaf and what stands beside it for a wall 1.5 m long).
-constexpr double kOtherWallFace = 0.01, kOtherWallLonger = 0.5;
 
 // f(0) ... f(n - 1) over the cores (OpenMP), each at most once; the first
 // exception thrown is rethrown here (none may escape an OpenMP region).
@@ -151,22 +147,6 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
   for (std::size_t wi = 0; wi < walls.size(); ++wi)
     for (const recognition::Doorway& d : doorways[wi]) candidates.push_back({wi, d, {}});
   auto thicknessOf = [&](const recognition::Doorway& d) { return d.thickness > 0.04 ? d.thickness : p.default_wall_thickness; };
-  // Points on the face of each wall clearly longer than any door (within
-  // kOtherWallFace of its plane), by wall: never a leaf of another wall's
-  // doorway (the wall round a corner from a doorway stands like a leaf at
-  // 90 deg). A leaf swung against a wall stands a leaf's thickness off it.
-  std::vector<int> long_wall(pts.size(), -1);
-  for (std::size_t wi = 0; wi < walls.size(); ++wi)
-    if (walls[wi].s_max - walls[wi].s_min > p.door_max_width + kOtherWallLonger)
-      for (int i : walls[wi].inliers)
-        if (std::abs(walls[wi].signedDistance(pts[i])) < kOtherWallFace) long_wall[i] = static_cast<int>(wi);
-  std::vector<std::vector<char>> other_wall(walls.size());
-  for (const Candidate& c : candidates)
-    if (other_wall[c.wall].empty()) {
-      other_wall[c.wall].resize(pts.size());
-      for (std::size_t i = 0; i < pts.size(); ++i)
-        other_wall[c.wall][i] = long_wall[i] >= 0 && long_wall[i] != static_cast<int>(c.wall);
-    }
   parallelFor(candidates.size(), [&](std::size_t i) {
     Candidate& c = candidates[i];
     // Without trim, see-through or a deep recess only a closed leaf filling
@@ -178,7 +158,7 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
     const bool other_evidence = d.casing || d.through >= 0.08 || d.recess > 0.3 || d.set_back > 0 ||
                                 (d.front >= kOwnLeafFront && mayBeOwnLeaf(pts, walls[c.wall], d, floor_z, viewpoint, p));
     c.leaf = fitLeaf(pts, walls[c.wall], d, floor_z, thicknessOf(d), viewpoint, p,
-                            other_evidence ? 0.0 : kClosedBandEvidence, view, &other_wall[c.wall]);
+                            other_evidence ? 0.0 : kClosedBandEvidence, view);
   });
   for (const Candidate& cand : candidates) {
     {

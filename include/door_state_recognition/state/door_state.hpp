@@ -58,13 +58,10 @@ struct LeafFit {
 // covering more than that share of the doorway could make it a door (the
 // caller found no other evidence): when the points in the wall band cover
 // less, the search is skipped (searched = false, found = false).
-// `other_wall` (per point, optional): on the face of another wall longer
-// than any door; such points never support a leaf (the wall round a corner
-// from a doorway stands like a leaf at 90 deg).
 LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlane& wall,
                 const recognition::Doorway& doorway, double floor_z, double thickness,
                 const Eigen::Vector3f& viewpoint, const Parameters& p, double closed_band_only_above = 0,
-                const segmentation::ViewTop* view = nullptr, const std::vector<char>* other_wall = nullptr);
+                const segmentation::ViewTop* view = nullptr);
 
 DoorStateKind classify(double angle_deg, const Parameters& p);
 
