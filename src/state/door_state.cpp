@@ -198,14 +198,20 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   std::vector<Ray> rays;
   const Eigen::Vector2d vsd(wall.along(viewpoint), wall.signedDistance(viewpoint));
   const Eigen::Vector2d dc(s_mid, -t / 2);
-  for (const auto& q : points) {
-    const Eigen::Vector2d qsd(wall.along(q), wall.signedDistance(q));
+  // A return whose ray from the sensor passes near the doorway: its (s, d)
+  // and the ray's squared length in the wall's plan.
+  auto nearDoorway = [&](const Eigen::Vector3f& q, Eigen::Vector2d& qsd, double& len2) {
+    qsd = Eigen::Vector2d(wall.along(q), wall.signedDistance(q));
     const Eigen::Vector2d r = qsd - vsd;
-    const double len2 = r.squaredNorm();
-    if (len2 < 1e-6) continue;
+    len2 = r.squaredNorm();
+    if (len2 < 1e-6) return false;
     const double lam = std::clamp((dc - vsd).dot(r) / len2, 0.0, 1.0);
-    if ((vsd + lam * r - dc).norm() > reach + Lmax) continue;
-    rays.push_back({vsd, qsd, viewpoint.z(), q.z(), std::sqrt(len2)});
+    return !((vsd + lam * r - dc).norm() > reach + Lmax);
+  };
+  for (const auto& q : points) {
+    Eigen::Vector2d qsd;
+    double len2;
+    if (nearDoorway(q, qsd, len2)) rays.push_back({vsd, qsd, viewpoint.z(), q.z(), std::sqrt(len2)});
   }
   // Enough rays to see free space at 5 cm x 10 cm cells; more only cost time.
   if (rays.size() > 15000) {
@@ -640,13 +646,9 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     const Eigen::Vector2d dcv = dc - vsd;
     RangeImage image(vsd, viewpoint.z(), std::atan2(dcv.y(), dcv.x()));
     for (const auto& q : points) {
-      const Eigen::Vector2d qsd(wall.along(q), wall.signedDistance(q));
-      const Eigen::Vector2d r = qsd - vsd;
-      const double len2 = r.squaredNorm();
-      if (len2 < 1e-6) continue;
-      const double lam = std::clamp((dc - vsd).dot(r) / len2, 0.0, 1.0);
-      if ((vsd + lam * r - dc).norm() > reach + Lmax) continue;
-      image.add(qsd, q.z());
+      Eigen::Vector2d qsd;
+      double len2;
+      if (nearDoorway(q, qsd, len2)) image.add(qsd, q.z());
     }
     // Every hinge, swing side and recess the search tried: a leaf hinged
     // deeper in its doorway than the hypothesis would rule it out wrongly.
