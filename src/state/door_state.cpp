@@ -338,6 +338,105 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     }
   };
 
+  // The hinges of the local search all at once: the same angles at hinges
+  // 2 cm apart along the wall (w[i].s_h = s_center + (i - reach) 0.02, one
+  // d_h). For one point or ray and one angle, the tests below are linear in
+  // the hinge's position along the wall: each passes only on an interval of
+  // it, so each point and ray is tested (exactly, as scorePoints and
+  // scoreRays test it) only at the hinges of that interval, widened by
+  // kShiftSlack; the result is the same as testing it at every hinge. The
+  // angles are the tasks (over the cores).
+  auto scoreShifts = [&](std::vector<HingeRun>& ws, int reach, double s_center) {
+    const int ns = static_cast<int>(ws.size()), count = ws.front().count;
+    const double d_h = ws.front().d_h;
+    std::vector<std::vector<Eigen::Vector2d>> E(ns), K(ns), P(ns);
+    for (int i = 0; i < ns; ++i) {
+      axes(ws[i], E[i], K[i], P[i]);
+      ws[i].sup.assign(static_cast<std::size_t>(count) * na_max, 0);
+      ws[i].con.assign(static_cast<std::size_t>(count) * na_max, 0);
+    }
+    // Rounding moves the ends of an interval by far less than a micrometre
+    // (coefficients below kTiny are not used, and rays within 1e-3 of
+    // parallel to the leaf are tested at every hinge): widened by a whole
+    // hinge step, an interval holds every hinge a test could pass at.
+    constexpr double kShiftSlack = 0.02, kTiny = 1e-3;
+    // Hinges i whose s_h lies within [lo, hi], as [i0, i1] (empty: i0 > i1).
+    auto hingeRange = [&](double lo, double hi, int& i0, int& i1) {
+      const double f0 = std::max(-1.0, (lo - s_center) / 0.02 + reach), f1 = std::min(static_cast<double>(ns), (hi - s_center) / 0.02 + reach);
+      i0 = std::max(0, static_cast<int>(std::ceil(f0)));
+      i1 = std::min(ns - 1, static_cast<int>(std::floor(f1)));
+    };
+    // x with c0 + c1 x in [lo, hi], widened by kShiftSlack, intersected into
+    // [xlo, xhi] (no bound when c1 is too small to tell).
+    auto clip = [&](double c0, double c1, double lo, double hi, double& xlo, double& xhi) {
+      if (std::abs(c1) < kTiny) return;
+      double a = (lo - c0) / c1, b = (hi - c0) / c1;
+      if (a > b) std::swap(a, b);
+      xlo = std::max(xlo, a - kShiftSlack);
+      xhi = std::min(xhi, b + kShiftSlack);
+    };
+    const double inf = std::numeric_limits<double>::infinity();
+    forEachTask(static_cast<std::size_t>(count), [&](std::size_t task) {
+      const int ai = static_cast<int>(task);
+      std::vector<char> seen(static_cast<std::size_t>(ns) * cells, 0), blocked(static_cast<std::size_t>(ns) * cells, 0);
+      const Eigen::Vector2d Ea = E[0][ai], Ka = K[0][ai];
+      for (const Local& q : pts) {
+        // r = (q.s - s_h, q.d - d_h): a = r.E and b = r.K are linear in x = q.s - s_h.
+        const double dy = q.d - d_h;
+        double xlo = -inf, xhi = inf;
+        clip(dy * Ea.y(), Ea.x(), 0.02, Lmax, xlo, xhi);
+        clip(dy * Ka.y(), Ka.x(), -tol, lt + tol, xlo, xhi);
+        if (xlo > xhi) continue;
+        int i0, i1;
+        hingeRange(q.s - xhi, q.s - xlo, i0, i1);
+        for (int i = i0; i <= i1; ++i) {
+          const HingeRun& w = ws[i];
+          const Eigen::Vector2d r(q.s - w.s_h, q.d - w.d_h);
+          const double a = r.dot(E[i][ai]), b = r.dot(K[i][ai]);
+          if (a < 0.02 || a >= Lmax || b < -tol || b > lt + tol) continue;
+          const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
+          char& f = seen[static_cast<std::size_t>(i) * cells + static_cast<std::size_t>(ab) * nz + q.zbin];
+          if (!f) f = 1, ++ws[i].sup[static_cast<std::size_t>(ai) * na_max + ab];
+        }
+      }
+      for (const Ray& ray : rays) {
+        const Eigen::Vector2d r = ray.q - ray.v;
+        const double denom = r.x() * Ea.y() - r.y() * Ea.x();
+        if (std::abs(denom) < 1e-9) continue;  // crossLeaf: parallel, crosses at no hinge
+        const double lam_max = 1 - 0.06 / ray.len, dz = ray.qz - ray.vz;
+        // w = P - v: w.y the same at every hinge, w.x = s_h + (K.x lt / 2 - v.x) =: s_h + off.
+        const double wy = P[0][ai].y() - ray.v.y(), off = Ka.x() * (lt / 2) - ray.v.x();
+        // lam = (w.x E.y - w.y E.x) / denom in (0, lam_max], and z = vz + lam dz in [z0, z1).
+        double llo = 0, lhi = lam_max;
+        if (std::abs(dz) >= kTiny) {
+          double za = (z0 - ray.vz) / dz, zb = (z1 - ray.vz) / dz;
+          if (za > zb) std::swap(za, zb);
+          llo = std::max(llo, za), lhi = std::min(lhi, zb);
+        }
+        if (llo > lhi + 1e-9) continue;
+        double xlo = -inf, xhi = inf;  // x = w.x
+        if (std::abs(denom) >= kTiny) {
+          clip(-wy * Ea.x() / denom, Ea.y() / denom, llo, lhi, xlo, xhi);
+          // a = (w.x r.y - w.y r.x) / denom in [0.05, Lmax).
+          clip(-wy * r.x() / denom, r.y() / denom, 0.05, Lmax, xlo, xhi);
+          if (xlo > xhi) continue;
+        }
+        int i0, i1;
+        hingeRange(xlo - off, xhi - off, i0, i1);
+        for (int i = i0; i <= i1; ++i) {
+          double a, z;
+          if (!crossLeaf(ray.v, r, ray.vz, dz, lam_max, P[i][ai], E[i][ai], a, z) || a < 0.05 || a >= Lmax || z < z0 ||
+              z >= z1)
+            continue;
+          const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
+          char& f = blocked[static_cast<std::size_t>(i) * cells + static_cast<std::size_t>(ab) * nz +
+                            std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
+          if (!f) f = 1, ++ws[i].con[static_cast<std::size_t>(ai) * na_max + ab];
+        }
+      }
+    });
+  };
+
   // Global search: hinge at either jamb, either swing side, hinge on the
   // face or set back (recess), every degree. The hinges are scored as tasks
   // (over the cores), the best taken in order. Support bounds a hypothesis's
@@ -408,14 +507,21 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     const int reach_steps = door.paired ? 3 : 15;  // 2 cm steps
     const double start = deg_center - 2.5, step = 0.5;
     std::vector<HingeRun> shifts(2 * reach_steps + 1);
-    forEachTask(shifts.size(), [&](std::size_t i) {
+    for (std::size_t i = 0; i < shifts.size(); ++i) {
       HingeRun& w = shifts[i];
       w.s_h = s_center + (static_cast<int>(i) - reach_steps) * 0.02;
       w.d_h = d_h, w.e0 = e0, w.m = m, w.start = start, w.step = step, w.count = 11;
-      scorePoints(w);
-      scoreRays(w, nullptr);
-      finishScores(w, nullptr);
-    });
+    }
+    // Few hinges (a paired doorway): each on its own costs less.
+    if (reach_steps > 3) {
+      scoreShifts(shifts, reach_steps, s_center);
+    } else {
+      forEachTask(shifts.size(), [&](std::size_t i) {
+        scorePoints(shifts[i]);
+        scoreRays(shifts[i], nullptr);
+      });
+    }
+    for (HingeRun& w : shifts) finishScores(w, nullptr);
     for (int ds = -reach_steps; ds <= reach_steps; ++ds) {
       const double s_h = s_center + ds * 0.02;
       for (int ai = 0; ai < 11; ++ai) {
