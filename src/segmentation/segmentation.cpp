@@ -102,16 +102,49 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
   std::vector<Pca> coarse(cm.size());
   std::vector<Eigen::Vector3i> ccoord(cm.size());
   for (std::size_t c = 0; c < cells; ++c) ccoord[coarse_of[c]] = coarseOf(c);
+  // The coarse cells' numbers in a dense block over their bounding box (one
+  // cell of margin) when that block is small: a neighbour is then one load
+  // instead of a hash probe. Within +-2^20 cells no packed key wraps, so the
+  // block holds exactly what the hash map holds (the same neighbours, added
+  // in the same order).
+  Eigen::Vector3i lo = Eigen::Vector3i::Constant(std::numeric_limits<int>::max()), hi = -lo;
+  for (const Eigen::Vector3i& q : ccoord) lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
+  std::vector<std::uint32_t> dense;
+  Eigen::Vector3i dims = Eigen::Vector3i::Zero();
+  if (!ccoord.empty() && lo.minCoeff() > -(1 << 20) + 1 && hi.maxCoeff() < (1 << 20) - 2) {
+    lo -= Eigen::Vector3i::Ones();
+    dims = (hi - lo) + Eigen::Vector3i::Constant(2);
+    const double volume = static_cast<double>(dims.x()) * dims.y() * dims.z();
+    if (volume <= 64.0 * static_cast<double>(cm.size()) + (1 << 20)) {
+      dense.assign(static_cast<std::size_t>(volume), preprocess::CellMap::kNone);
+      for (std::size_t i = 0; i < ccoord.size(); ++i) {
+        const Eigen::Vector3i r = ccoord[i] - lo;
+        dense[(static_cast<std::size_t>(r.z()) * dims.y() + r.y()) * dims.x() + r.x()] = static_cast<std::uint32_t>(i);
+      }
+    }
+  }
 #pragma omp parallel for schedule(dynamic, 256)
   for (long long i = 0; i < static_cast<long long>(cm.size()); ++i) {
     Moments acc;
     const Eigen::Vector3i& q = ccoord[i];
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const std::uint32_t o = coarse_map.find(preprocess::packCell(q.x() + dx, q.y() + dy, q.z() + dz));
-          if (o != preprocess::CellMap::kNone) acc.add(cm[o]);
+    if (!dense.empty()) {
+      const Eigen::Vector3i r = q - lo;
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy) {
+          const std::uint32_t* row = dense.data() + (static_cast<std::size_t>(r.z() + dz) * dims.y() + (r.y() + dy)) * dims.x() + r.x();
+          for (int dx = -1; dx <= 1; ++dx) {
+            const std::uint32_t o = row[dx];
+            if (o != preprocess::CellMap::kNone) acc.add(cm[o]);
+          }
         }
+    } else {
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const std::uint32_t o = coarse_map.find(preprocess::packCell(q.x() + dx, q.y() + dy, q.z() + dz));
+            if (o != preprocess::CellMap::kNone) acc.add(cm[o]);
+          }
+    }
     coarse[i] = pca(acc);
   }
   // Fine cells take the coarse normal where it is planar (most of a room);
