@@ -362,6 +362,10 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
     if (std::abs(normals.n[i].z()) < p.vertical_normal_z && points[i].z() > floor_z + 0.05) pool.push_back(static_cast<int>(i));
   std::vector<WallPlane> walls;
   std::mt19937 rng(static_cast<unsigned>(p.random_seed));
+  struct Sample {
+    float x, y, nx, ny;
+  };
+  std::vector<Sample> sample;
   for (int round = 0; round < 4 * p.max_walls && static_cast<int>(walls.size()) < p.max_walls; ++round) {
     if (static_cast<int>(pool.size()) < p.min_wall_points) break;
     // 1-point RANSAC: a point with its (horizontal) normal proposes a plane.
@@ -373,6 +377,13 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
     // Adaptive: stop once a plane larger than the best would have been drawn
     // with probability 0.999 (capped by ransac_iterations).
     int needed = p.ransac_iterations;
+    // The scored sample (every stride-th point of the pool) side by side:
+    // x, y and the normal's x, y, read in turn instead of gathered.
+    sample.clear();
+    for (std::size_t j = 0; j < pool.size(); j += stride) {
+      const int i = pool[j];
+      sample.push_back({points[i].x(), points[i].y(), normals.n[i].x(), normals.n[i].y()});
+    }
     for (int it = 0; it < std::min(needed, p.ransac_iterations); ++it) {
       const int s = pool[pick(rng)];
       Eigen::Vector2d n(normals.n[s].x(), normals.n[s].y());
@@ -380,11 +391,9 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
       n.normalize();
       const Eigen::Vector2d q(points[s].x(), points[s].y());
       std::size_t count = 0;
-      for (std::size_t j = 0; j < pool.size(); j += stride) {
-        const int i = pool[j];
-        const Eigen::Vector2d r(points[i].x(), points[i].y());
-        if (std::abs((r - q).dot(n)) < p.wall_distance &&
-            std::abs(n.x() * normals.n[i].x() + n.y() * normals.n[i].y()) > p.wall_normal_agreement)
+      for (const Sample& e : sample) {
+        const Eigen::Vector2d r(e.x, e.y);
+        if (std::abs((r - q).dot(n)) < p.wall_distance && std::abs(n.x() * e.nx + n.y() * e.ny) > p.wall_normal_agreement)
           ++count;
       }
       if (count > best_count) {
