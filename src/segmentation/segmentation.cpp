@@ -61,22 +61,39 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
     auto half = [](int v) { return v >= 0 ? v / 2 : -((-v + 1) / 2); };
     return Eigen::Vector3i(half(k3.x()), half(k3.y()), half(k3.z()));
   };
-  preprocess::CellMap coarse_map(cells / 4 + 1);
+  // The grid's own coarse level when it has one (a dense index, see
+  // NeighbourGrid::coarseCells), else a hash map of coarse cells here. Either
+  // way a coarse cell's moments are its cells' added in cell order.
+  const bool grid_coarse = grid.coarseCells() > 0;
+  preprocess::CellMap coarse_map(grid_coarse ? 1 : cells / 4 + 1);
   std::vector<Moments> cm;
   std::vector<std::uint32_t> coarse_of(cells);
-  cm.reserve(cells / 4 + 1);
-  std::uint64_t last_key = ~std::uint64_t(0);  // no packed key
-  std::uint32_t last_id = 0;
-  for (std::size_t c = 0; c < cells; ++c) {
-    const Eigen::Vector3i q = coarseOf(c);
-    // Cells come in scan order: runs of them share a coarse cell.
-    const std::uint64_t key = preprocess::packCell(q.x(), q.y(), q.z());
-    const std::uint32_t id = key == last_key ? last_id : coarse_map.insert(key);
-    last_key = key;
-    last_id = id;
-    if (id == cm.size()) cm.emplace_back();
-    cm[id].add(m[c]);
-    coarse_of[c] = id;
+  std::vector<Eigen::Vector3i> ccoord;
+  if (grid_coarse) {
+    cm.resize(grid.coarseCells());
+    ccoord.resize(grid.coarseCells());
+    for (std::size_t c = 0; c < cells; ++c) {
+      coarse_of[c] = grid.coarseOf(c);
+      cm[coarse_of[c]].add(m[c]);
+    }
+    for (std::size_t q = 0; q < ccoord.size(); ++q) ccoord[q] = grid.coarseCoord(q);
+  } else {
+    cm.reserve(cells / 4 + 1);
+    std::uint64_t last_key = ~std::uint64_t(0);  // no packed key
+    std::uint32_t last_id = 0;
+    for (std::size_t c = 0; c < cells; ++c) {
+      const Eigen::Vector3i q = coarseOf(c);
+      // Cells come in scan order: runs of them share a coarse cell.
+      const std::uint64_t key = preprocess::packCell(q.x(), q.y(), q.z());
+      const std::uint32_t id = key == last_key ? last_id : coarse_map.insert(key);
+      last_key = key;
+      last_id = id;
+      if (id == cm.size()) cm.emplace_back();
+      cm[id].add(m[c]);
+      coarse_of[c] = id;
+    }
+    ccoord.resize(cm.size());
+    for (std::size_t c = 0; c < cells; ++c) ccoord[coarse_of[c]] = coarseOf(c);
   }
   const int need = std::min(k, 8);
   struct Pca {
@@ -100,51 +117,17 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
   };
   // Coarse normals first: the 3 x 3 x 3 coarse cells around each coarse cell.
   std::vector<Pca> coarse(cm.size());
-  std::vector<Eigen::Vector3i> ccoord(cm.size());
-  for (std::size_t c = 0; c < cells; ++c) ccoord[coarse_of[c]] = coarseOf(c);
-  // The coarse cells' numbers in a dense block over their bounding box (one
-  // cell of margin) when that block is small: a neighbour is then one load
-  // instead of a hash probe. Within +-2^20 cells no packed key wraps, so the
-  // block holds exactly what the hash map holds (the same neighbours, added
-  // in the same order).
-  Eigen::Vector3i lo = Eigen::Vector3i::Constant(std::numeric_limits<int>::max()), hi = -lo;
-  for (const Eigen::Vector3i& q : ccoord) lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
-  std::vector<std::uint32_t> dense;
-  Eigen::Vector3i dims = Eigen::Vector3i::Zero();
-  if (!ccoord.empty() && lo.minCoeff() > -(1 << 20) + 1 && hi.maxCoeff() < (1 << 20) - 2) {
-    lo -= Eigen::Vector3i::Ones();
-    dims = (hi - lo) + Eigen::Vector3i::Constant(2);
-    const double volume = static_cast<double>(dims.x()) * dims.y() * dims.z();
-    if (volume <= 64.0 * static_cast<double>(cm.size()) + (1 << 20)) {
-      dense.assign(static_cast<std::size_t>(volume), preprocess::CellMap::kNone);
-      for (std::size_t i = 0; i < ccoord.size(); ++i) {
-        const Eigen::Vector3i r = ccoord[i] - lo;
-        dense[(static_cast<std::size_t>(r.z()) * dims.y() + r.y()) * dims.x() + r.x()] = static_cast<std::uint32_t>(i);
-      }
-    }
-  }
 #pragma omp parallel for schedule(dynamic, 256)
   for (long long i = 0; i < static_cast<long long>(cm.size()); ++i) {
     Moments acc;
     const Eigen::Vector3i& q = ccoord[i];
-    if (!dense.empty()) {
-      const Eigen::Vector3i r = q - lo;
-      for (int dz = -1; dz <= 1; ++dz)
-        for (int dy = -1; dy <= 1; ++dy) {
-          const std::uint32_t* row = dense.data() + (static_cast<std::size_t>(r.z() + dz) * dims.y() + (r.y() + dy)) * dims.x() + r.x();
-          for (int dx = -1; dx <= 1; ++dx) {
-            const std::uint32_t o = row[dx];
-            if (o != preprocess::CellMap::kNone) acc.add(cm[o]);
-          }
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const std::uint32_t o = grid_coarse ? grid.findCoarse(q.x() + dx, q.y() + dy, q.z() + dz)
+                                              : coarse_map.find(preprocess::packCell(q.x() + dx, q.y() + dy, q.z() + dz));
+          if (o != preprocess::CellMap::kNone) acc.add(cm[o]);
         }
-    } else {
-      for (int dz = -1; dz <= 1; ++dz)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) {
-            const std::uint32_t o = coarse_map.find(preprocess::packCell(q.x() + dx, q.y() + dy, q.z() + dz));
-            if (o != preprocess::CellMap::kNone) acc.add(cm[o]);
-          }
-    }
     coarse[i] = pca(acc);
   }
   // Fine cells take the coarse normal where it is planar (most of a room);
@@ -362,10 +345,7 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
     if (std::abs(normals.n[i].z()) < p.vertical_normal_z && points[i].z() > floor_z + 0.05) pool.push_back(static_cast<int>(i));
   std::vector<WallPlane> walls;
   std::mt19937 rng(static_cast<unsigned>(p.random_seed));
-  struct Sample {
-    float x, y, nx, ny;
-  };
-  std::vector<Sample> sample;
+  std::vector<float> sx, sy, snx, sny;  // the scored sample, side by side
   for (int round = 0; round < 4 * p.max_walls && static_cast<int>(walls.size()) < p.max_walls; ++round) {
     if (static_cast<int>(pool.size()) < p.min_wall_points) break;
     // 1-point RANSAC: a point with its (horizontal) normal proposes a plane.
@@ -377,24 +357,29 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
     // Adaptive: stop once a plane larger than the best would have been drawn
     // with probability 0.999 (capped by ransac_iterations).
     int needed = p.ransac_iterations;
-    // The scored sample (every stride-th point of the pool) side by side:
+    // The scored sample (every stride-th point of the pool) in arrays of
     // x, y and the normal's x, y, read in turn instead of gathered.
-    sample.clear();
+    sx.clear(), sy.clear(), snx.clear(), sny.clear();
     for (std::size_t j = 0; j < pool.size(); j += stride) {
       const int i = pool[j];
-      sample.push_back({points[i].x(), points[i].y(), normals.n[i].x(), normals.n[i].y()});
+      sx.push_back(points[i].x()), sy.push_back(points[i].y());
+      snx.push_back(normals.n[i].x()), sny.push_back(normals.n[i].y());
     }
+    const std::size_t ns = sx.size();
+    const double wd = p.wall_distance, agree = p.wall_normal_agreement;
     for (int it = 0; it < std::min(needed, p.ransac_iterations); ++it) {
       const int s = pool[pick(rng)];
       Eigen::Vector2d n(normals.n[s].x(), normals.n[s].y());
       if (n.norm() < 0.5) continue;
       n.normalize();
       const Eigen::Vector2d q(points[s].x(), points[s].y());
-      std::size_t count = 0;
-      for (const Sample& e : sample) {
-        const Eigen::Vector2d r(e.x, e.y);
-        if (std::abs((r - q).dot(n)) < p.wall_distance && std::abs(n.x() * e.nx + n.y() * e.ny) > p.wall_normal_agreement)
-          ++count;
+      // |(r - q) . n| < wall_distance and |n . n_i| > agreement, without branches.
+      const double qx = q.x(), qy = q.y(), nx = n.x(), ny = n.y();
+      std::size_t count = 0, j = 0;
+      for (; j < ns; ++j) {
+        const double dist = (static_cast<double>(sx[j]) - qx) * nx + (static_cast<double>(sy[j]) - qy) * ny;
+        const double dot = nx * static_cast<double>(snx[j]) + ny * static_cast<double>(sny[j]);
+        count += static_cast<std::size_t>((std::abs(dist) < wd) & (std::abs(dot) > agree));
       }
       if (count > best_count) {
         best_count = count, best_pt = q, best_n = n;
