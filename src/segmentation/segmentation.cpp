@@ -8,6 +8,10 @@
 #include <cmath>
 #include <random>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace dsr {
 namespace segmentation {
 
@@ -376,6 +380,23 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
       // |(r - q) . n| < wall_distance and |n . n_i| > agreement, without branches.
       const double qx = q.x(), qy = q.y(), nx = n.x(), ny = n.y();
       std::size_t count = 0, j = 0;
+#if defined(__SSE2__)
+      {  // two at a time: the same double operations, in the same order
+        const __m128d vqx = _mm_set1_pd(qx), vqy = _mm_set1_pd(qy), vnx = _mm_set1_pd(nx), vny = _mm_set1_pd(ny);
+        const __m128d vwd = _mm_set1_pd(wd), vag = _mm_set1_pd(agree);
+        const __m128d abs_mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
+        auto load2 = [](const float* f) { return _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(f)))); };
+        for (; j + 2 <= ns; j += 2) {
+          const __m128d dist = _mm_add_pd(_mm_mul_pd(_mm_sub_pd(load2(&sx[j]), vqx), vnx),
+                                          _mm_mul_pd(_mm_sub_pd(load2(&sy[j]), vqy), vny));
+          const __m128d dot = _mm_add_pd(_mm_mul_pd(vnx, load2(&snx[j])), _mm_mul_pd(vny, load2(&sny[j])));
+          const __m128d in = _mm_and_pd(_mm_cmplt_pd(_mm_and_pd(dist, abs_mask), vwd),
+                                        _mm_cmpgt_pd(_mm_and_pd(dot, abs_mask), vag));
+          const int bits = _mm_movemask_pd(in);
+          count += static_cast<std::size_t>((bits & 1) + (bits >> 1));
+        }
+      }
+#endif
       for (; j < ns; ++j) {
         const double dist = (static_cast<double>(sx[j]) - qx) * nx + (static_cast<double>(sy[j]) - qy) * ny;
         const double dot = nx * static_cast<double>(snx[j]) + ny * static_cast<double>(sny[j]);
