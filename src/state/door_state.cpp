@@ -45,6 +45,15 @@ double fastAtan2Deg(double y, double x) {
 }
 constexpr double kBearingSlackDeg = 0.01;
 
+// An upper bound of asin(x), x in [0, 1], within 2% for x <= 0.5: asin's
+// series x + x^3/6 + 3x^5/40 + ... has no coefficient above 1/6 after the
+// first, so it is at most x + x^3 / (6 (1 - x^2)); capped at pi / 2. An arc
+// widened by it holds every angle asin's would (the tests decide).
+inline double asinAbove(double x) {
+  if (x >= 1) return M_PI / 2;
+  return std::min(M_PI / 2, x + x * x * x / (6 * (1 - x * x)));
+}
+
 // f(0) ... f(n - 1) as OpenMP tasks: run by the threads of the enclosing
 // parallel region as they come free (findDoors runs doorways over the cores,
 // so one doorway's search is shared by a core left idle), or in turn outside
@@ -263,8 +272,8 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
         for (int ai = 0; ai < w.count; ++ai) test(ai);
         continue;
       }
-      const double below = std::asin(tol / rho) * 180 / M_PI + kBearingSlackDeg;
-      const double above = std::asin(band_hw / rho) * 180 / M_PI + kBearingSlackDeg;
+      const double below = asinAbove(tol / rho) * 180 / M_PI + kBearingSlackDeg;
+      const double above = asinAbove(band_hw / rho) * 180 / M_PI + kBearingSlackDeg;
       forArc(w, c - below, c + above, test);
     }
   };
@@ -315,7 +324,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       const double lo = c0 + std::min(0.0, span), hi = lo + std::abs(span);
       // The leaf's mid-line passes a point X of the chord (bearing c, distance
       // rho) at th = c + asin(lt / 2 / rho): the arc widens on one side only.
-      const double dl = std::asin(std::min(1.0, lt / 2 / rho_min)) * 180 / M_PI + kBearingSlackDeg;
+      const double dl = asinAbove(std::min(1.0, lt / 2 / rho_min)) * 180 / M_PI + kBearingSlackDeg;
       forArc(w, lo - kBearingSlackDeg, hi + dl, test);
     }
   };
