@@ -1,6 +1,7 @@
 #include "door_state_recognition/segmentation/segmentation.hpp"
 
 #include "door_state_recognition/preprocess/cell_map.hpp"
+#include "door_state_recognition/util/radix_sort.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -275,7 +276,7 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
   // Split along the wall at gaps wider than wall_gap.
   std::vector<std::pair<double, int>> along;
   for (int i : inliers) along.push_back({(Eigen::Vector2d(points[i].x(), points[i].y()) - point).dot(direction), i});
-  std::sort(along.begin(), along.end());
+  util::sortPairs(along);  // std::sort's order, in linear time
   std::size_t start = 0;
   for (std::size_t k = 1; k <= along.size(); ++k) {
     if (k < along.size() && along[k].first - along[k - 1].first <= p.wall_gap) continue;
@@ -461,7 +462,8 @@ std::vector<std::vector<int>> growRegions(const Points& points, const Normals& n
     for (const int* it = grid.cellBegin(c); it != grid.cellEnd(c); ++it) live[c] |= mask[*it] != 0;
     if (live[c] && curv[c] <= p.region_curvature && cn[c].squaredNorm() > 0.25f) order.push_back(static_cast<int>(c));
   }
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return curv[a] < curv[b]; });
+  // By curvature, ties in cell order: a stable sort, by radix.
+  util::radixSortBy(order, [&](int c) { return static_cast<std::uint64_t>(util::orderedBits(curv[c])); });
   std::vector<int> label(cells, -1);
   std::vector<std::vector<int>> regions;
   std::vector<std::uint32_t> nbs;
