@@ -104,6 +104,14 @@ TEST(VoxelGrid, LargeCloudsGiveExactlyTheNaiveCentroidsAndSanitizingInThePassCha
   const auto fused = preprocess::sanitizeAndDownsample(cloud, max_abs, leaf, &kept);
   EXPECT_EQ(kept, pts.size());
   EXPECT_EQ(fused, out);
+  // Spread too wide for the dense index, the hash map (shared among the cores) serves: the same result.
+  auto wide = pts;
+  wide.push_back(Eigen::Vector3f(9000, -9000, 9000));
+  wide.push_back(Eigen::Vector3f(-9000, 9000, -9000));
+  const auto naive_wide = naiveCentroids(wide, leaf);
+  const auto out_wide = preprocess::voxelDownsample(wide, leaf);
+  ASSERT_EQ(out_wide.size(), naive_wide.size());
+  for (std::size_t i = 0; i < out_wide.size(); ++i) ASSERT_EQ(out_wide[i], naive_wide[i]) << "voxel " << i;
 }
 
 TEST(NeighbourGrid, FindsExactlyThePointsWithinTheRadius) {
