@@ -509,7 +509,13 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   }
   // Local search: the jamb seen from the wall can be off where a leaf hides
   // or shadows its own doorway; move the hinge along the wall and the angle.
-  {
+  // It moves the angle by 2.5 deg at most: with the wall band full enough for
+  // a closed leaf (band_cov >= 0.55, below) and the best angle below
+  // closed_below_deg + 0.5, the leaf is taken closed in the band whatever it
+  // finds, and nothing it finds is used (but best_*, which then tell the
+  // global search's best): skipped.
+  const bool closed_in_band_for_sure = band_cov >= 0.55 && best_deg + 2.5 < p.closed_below_deg + 3;
+  if (!closed_in_band_for_sure) {
     const double e0 = best_h == 0 ? 1.0 : -1.0, m = best_sw == 0 ? 1.0 : -1.0;
     const double d_h = best_sw == 0 ? -best_recess : -t + best_recess;
     const double s_center = best_s, deg_center = best_deg;
