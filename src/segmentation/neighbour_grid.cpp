@@ -115,6 +115,27 @@ std::uint32_t NeighbourGrid::findCell(int x, int y, int z) const {
 void NeighbourGrid::neighbourCells(std::size_t c, int ring, std::vector<std::uint32_t>& cells) const {
   cells.clear();
   const Eigen::Vector3i& k = coord_[c];
+  if (!dense_.empty() && ring <= 2) {
+    // The same cells in the same order as below, a row of coarse cells at a
+    // time: a cell's coarse cell lies a coarse cell or more inside the box,
+    // so 2 cells around it stay inside.
+    for (int dz = -ring; dz <= ring; ++dz) {
+      const int z = k.z() + dz;
+      for (int dy = -ring; dy <= ring; ++dy) {
+        const int y = k.y() + dy;
+        const std::size_t row = (static_cast<std::size_t>(half(z) - lo_.z()) * dims_.y() + (half(y) - lo_.y())) * dims_.x();
+        const int parity_yz = 2 * (y & 1) + 4 * (z & 1);
+        for (int dx = -ring; dx <= ring; ++dx) {
+          const int x = k.x() + dx;
+          const std::uint32_t kc = dense_[row + (half(x) - lo_.x())];
+          if (kc == CellMap::kNone) continue;
+          const std::uint32_t o = children_[8 * static_cast<std::size_t>(kc) + (x & 1) + parity_yz];
+          if (o != CellMap::kNone) cells.push_back(o);
+        }
+      }
+    }
+    return;
+  }
   for (int dz = -ring; dz <= ring; ++dz)
     for (int dy = -ring; dy <= ring; ++dy)
       for (int dx = -ring; dx <= ring; ++dx) {
