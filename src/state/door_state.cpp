@@ -355,14 +355,15 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   // scoreRays test it) only at the hinges of that interval, widened by
   // kShiftSlack; the result is the same as testing it at every hinge. The
   // angles are the tasks (over the cores).
-  auto scoreShifts = [&](std::vector<HingeRun>& ws, int reach, double s_center) {
+  // Points (support) when need is null; else rays (contradiction) at the
+  // hinges and angles where (*need)[hinge][angle].
+  auto scoreShifts = [&](std::vector<HingeRun>& ws, int reach, double s_center, const std::vector<std::vector<char>>* need) {
     const int ns = static_cast<int>(ws.size()), count = ws.front().count;
     const double d_h = ws.front().d_h;
     std::vector<std::vector<Eigen::Vector2d>> E(ns), K(ns), P(ns);
     for (int i = 0; i < ns; ++i) {
       axes(ws[i], E[i], K[i], P[i]);
-      ws[i].sup.assign(static_cast<std::size_t>(count) * na_max, 0);
-      ws[i].con.assign(static_cast<std::size_t>(count) * na_max, 0);
+      (need ? ws[i].con : ws[i].sup).assign(static_cast<std::size_t>(count) * na_max, 0);
     }
     // Rounding moves the ends of an interval by far less than a micrometre
     // (coefficients below kTiny are not used, and rays within 1e-3 of
@@ -389,25 +390,31 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       const int ai = static_cast<int>(task);
       std::vector<char> seen(static_cast<std::size_t>(ns) * cells, 0), blocked(static_cast<std::size_t>(ns) * cells, 0);
       const Eigen::Vector2d Ea = E[0][ai], Ka = K[0][ai];
-      for (const Local& q : pts) {
-        // r = (q.s - s_h, q.d - d_h): a = r.E and b = r.K are linear in x = q.s - s_h.
-        const double dy = q.d - d_h;
-        double xlo = -inf, xhi = inf;
-        clip(dy * Ea.y(), Ea.x(), 0.02, Lmax, xlo, xhi);
-        clip(dy * Ka.y(), Ka.x(), -tol, lt + tol, xlo, xhi);
-        if (xlo > xhi) continue;
-        int i0, i1;
-        hingeRange(q.s - xhi, q.s - xlo, i0, i1);
-        for (int i = i0; i <= i1; ++i) {
-          const HingeRun& w = ws[i];
-          const Eigen::Vector2d r(q.s - w.s_h, q.d - w.d_h);
-          const double a = r.dot(E[i][ai]), b = r.dot(K[i][ai]);
-          if (a < 0.02 || a >= Lmax || b < -tol || b > lt + tol) continue;
-          const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
-          char& f = seen[static_cast<std::size_t>(i) * cells + static_cast<std::size_t>(ab) * nz + q.zbin];
-          if (!f) f = 1, ++ws[i].sup[static_cast<std::size_t>(ai) * na_max + ab];
+      if (!need) {
+        for (const Local& q : pts) {
+          // r = (q.s - s_h, q.d - d_h): a = r.E and b = r.K are linear in x = q.s - s_h.
+          const double dy = q.d - d_h;
+          double xlo = -inf, xhi = inf;
+          clip(dy * Ea.y(), Ea.x(), 0.02, Lmax, xlo, xhi);
+          clip(dy * Ka.y(), Ka.x(), -tol, lt + tol, xlo, xhi);
+          if (xlo > xhi) continue;
+          int i0, i1;
+          hingeRange(q.s - xhi, q.s - xlo, i0, i1);
+          for (int i = i0; i <= i1; ++i) {
+            const HingeRun& w = ws[i];
+            const Eigen::Vector2d r(q.s - w.s_h, q.d - w.d_h);
+            const double a = r.dot(E[i][ai]), b = r.dot(K[i][ai]);
+            if (a < 0.02 || a >= Lmax || b < -tol || b > lt + tol) continue;
+            const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
+            char& f = seen[static_cast<std::size_t>(i) * cells + static_cast<std::size_t>(ab) * nz + q.zbin];
+            if (!f) f = 1, ++ws[i].sup[static_cast<std::size_t>(ai) * na_max + ab];
+          }
         }
+        return;
       }
+      bool any = false;
+      for (int i = 0; i < ns; ++i) any |= (*need)[i][ai] != 0;
+      if (!any) return;
       for (const Ray& ray : rays) {
         const Eigen::Vector2d r = ray.q - ray.v;
         const double denom = r.x() * Ea.y() - r.y() * Ea.x();
@@ -433,6 +440,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
         int i0, i1;
         hingeRange(xlo - off, xhi - off, i0, i1);
         for (int i = i0; i <= i1; ++i) {
+          if (!(*need)[i][ai]) continue;
           double a, z;
           if (!crossLeaf(ray.v, r, ray.vz, dz, lam_max, P[i][ai], E[i][ai], a, z) || a < 0.05 || a >= Lmax || z < z0 ||
               z >= z1)
@@ -492,8 +500,15 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   forEachTask(global.size(), [&](std::size_t i) {
     HingeRun& w = global[i];
     std::vector<char> need(w.count, 0);
-    for (int ai = 0; ai < w.count; ++ai) need[ai] = bound(w, ai) >= lower;
-    scoreRays(w, &need);
+    bool any = false;
+    for (int ai = 0; ai < w.count; ++ai) any |= (need[ai] = bound(w, ai) >= lower) != 0;
+    // A hinge none of whose angles can be the best needs no rays at all
+    // (most hinges: the bound leaves a few dozen of a thousand hypotheses).
+    if (any) {
+      scoreRays(w, &need);
+    } else {
+      w.con.assign(static_cast<std::size_t>(w.count) * na_max, 0);
+    }
     finishScores(w, &need);
   });
   Score best;
@@ -527,16 +542,34 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       w.s_h = s_center + (static_cast<int>(i) - reach_steps) * 0.02;
       w.d_h = d_h, w.e0 = e0, w.m = m, w.start = start, w.step = step, w.count = 11;
     }
+    // Support first. A hypothesis replaces the best only when it scores
+    // more, and it scores no more than its support (bound): rays are tested
+    // only where the bound beats the global search's best, and at angles
+    // within [0, 170] deg (the others are never taken).
     // Few hinges (a paired doorway): each on its own costs less.
     if (reach_steps > 3) {
-      scoreShifts(shifts, reach_steps, s_center);
+      scoreShifts(shifts, reach_steps, s_center, nullptr);
+    } else {
+      forEachTask(shifts.size(), [&](std::size_t i) { scorePoints(shifts[i]); });
+    }
+    std::vector<std::vector<char>> need(shifts.size(), std::vector<char>(11, 0));
+    for (std::size_t i = 0; i < shifts.size(); ++i)
+      for (int ai = 0; ai < 11; ++ai) {
+        const double deg = start + ai * step;
+        need[i][ai] = deg >= 0 && deg <= 170 && bound(shifts[i], ai) > best.score;
+      }
+    if (reach_steps > 3) {
+      scoreShifts(shifts, reach_steps, s_center, &need);
     } else {
       forEachTask(shifts.size(), [&](std::size_t i) {
-        scorePoints(shifts[i]);
-        scoreRays(shifts[i], nullptr);
+        if (std::find(need[i].begin(), need[i].end(), 1) != need[i].end()) {
+          scoreRays(shifts[i], &need[i]);
+        } else {
+          shifts[i].con.assign(static_cast<std::size_t>(shifts[i].count) * na_max, 0);
+        }
       });
     }
-    for (HingeRun& w : shifts) finishScores(w, nullptr);
+    for (std::size_t i = 0; i < shifts.size(); ++i) finishScores(shifts[i], &need[i]);
     for (int ds = -reach_steps; ds <= reach_steps; ++ds) {
       const double s_h = s_center + ds * 0.02;
       for (int ai = 0; ai < 11; ++ai) {
