@@ -16,6 +16,7 @@
 #include "door_state_recognition/preprocess/preprocess.hpp"
 #include "door_state_recognition/segmentation/neighbour_grid.hpp"
 #include "door_state_recognition/segmentation/segmentation.hpp"
+#include "door_state_recognition/util/radix_sort.hpp"
 
 using namespace dsr;
 
@@ -103,6 +104,14 @@ TEST(VoxelGrid, LargeCloudsGiveExactlyTheNaiveCentroidsAndSanitizingInThePassCha
   const auto fused = preprocess::sanitizeAndDownsample(cloud, max_abs, leaf, &kept);
   EXPECT_EQ(kept, pts.size());
   EXPECT_EQ(fused, out);
+  // Spread too wide for the dense index, the hash map (shared among the cores) serves: the same result.
+  auto wide = pts;
+  wide.push_back(Eigen::Vector3f(9000, -9000, 9000));
+  wide.push_back(Eigen::Vector3f(-9000, 9000, -9000));
+  const auto naive_wide = naiveCentroids(wide, leaf);
+  const auto out_wide = preprocess::voxelDownsample(wide, leaf);
+  ASSERT_EQ(out_wide.size(), naive_wide.size());
+  for (std::size_t i = 0; i < out_wide.size(); ++i) ASSERT_EQ(out_wide[i], naive_wide[i]) << "voxel " << i;
 }
 
 TEST(NeighbourGrid, FindsExactlyThePointsWithinTheRadius) {
@@ -133,6 +142,63 @@ TEST(NeighbourGrid, FindsExactlyThePointsWithinTheRadius) {
       EXPECT_NE(std::find(nbs.begin(), nbs.end(), c), nbs.end());
     }
     EXPECT_TRUE(std::all_of(seen.begin(), seen.end(), [](int s) { return s == 1; }));
+  }
+}
+
+// A small box is indexed densely, a huge one by the hash map: the same
+// cells, numbered alike, the same neighbours, and the same normals.
+TEST(NeighbourGrid, DenseAndHashedIndexesAgree) {
+  const auto pts = randomPoints(13, 3000, 0.4f, Eigen::Vector3f(-3, 2, 0));
+  auto far = pts;
+  far.push_back(Eigen::Vector3f(5000, -4000, 300));  // a bounding box far too large for the dense index
+  const segmentation::NeighbourGrid dense(pts, 0.05f), hashed(far, 0.05f);
+  ASSERT_GT(dense.coarseCells(), 0u);
+  ASSERT_EQ(hashed.coarseCells(), 0u);
+  ASSERT_EQ(hashed.cells(), dense.cells() + 1);
+  std::vector<std::uint32_t> a, b;
+  for (std::size_t c = 0; c < dense.cells(); ++c) {
+    ASSERT_EQ(dense.coord(c), hashed.coord(c));
+    ASSERT_EQ(std::vector<int>(dense.cellBegin(c), dense.cellEnd(c)), std::vector<int>(hashed.cellBegin(c), hashed.cellEnd(c)));
+    for (int ring : {1, 2}) {
+      dense.neighbourCells(c, ring, a);
+      hashed.neighbourCells(c, ring, b);
+      ASSERT_EQ(a, b) << "cell " << c << " ring " << ring;
+    }
+  }
+  const auto na = segmentation::estimateNormals(pts, dense, 16, Eigen::Vector3f::Zero());
+  const auto nb = segmentation::estimateNormals(far, hashed, 16, Eigen::Vector3f::Zero());
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    ASSERT_EQ(na.n[i], nb.n[i]) << "point " << i;
+    ASSERT_EQ(na.curvature[i], nb.curvature[i]) << "point " << i;
+  }
+}
+
+// The radix sorts put pairs in std::sort's order, ties, -0 and negatives included.
+TEST(RadixSort, PairsInStdSortOrder) {
+  std::mt19937 rng(21);
+  std::uniform_int_distribution<int> small(-20, 20);
+  for (int round = 0; round < 20; ++round) {
+    const std::size_t n = 50 + 300 * round;
+    std::vector<std::pair<double, int>> a;
+    std::vector<std::pair<float, int>> b;
+    for (std::size_t i = 0; i < n; ++i) {
+      // Few distinct values (ties), both zeros, large and tiny magnitudes.
+      const int k = small(rng);
+      const double d = k == 0 ? (i % 2 ? -0.0 : 0.0) : k * (k % 3 == 0 ? 1e-300 : k % 3 == 1 ? 0.37 : 1e12);
+      a.push_back({d, static_cast<int>(i)});  // ascending ints: the radix path
+      b.push_back({std::abs(static_cast<float>(d)), std::abs(small(rng)) * 1000 + small(rng) + 20});
+    }
+    auto ea = a;
+    auto eb = b;
+    std::sort(ea.begin(), ea.end());
+    std::sort(eb.begin(), eb.end());
+    util::sortPairs(a);
+    util::sortPairs(b);
+    for (std::size_t i = 0; i < n; ++i) {
+      ASSERT_EQ(a[i].second, ea[i].second) << "round " << round << " at " << i;
+      ASSERT_EQ(a[i].first, ea[i].first);
+      ASSERT_EQ(b[i], eb[i]) << "round " << round << " at " << i;
+    }
   }
 }
 

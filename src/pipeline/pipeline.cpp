@@ -105,9 +105,14 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
     watch.total();
     return res;
   }
-  std::sort(vertical_z.begin(), vertical_z.end());
-  double floor_z = fc.floor ? *fc.floor : vertical_z[vertical_z.size() / 200];
-  double top_z = fc.ceiling ? *fc.ceiling : vertical_z[vertical_z.size() - 1 - vertical_z.size() / 200];
+  // The foot and the top of the vertical structure: two ranks (a rank's value
+  // is the same whether the whole is sorted or only selected).
+  auto rank = [&](std::size_t k) {
+    std::nth_element(vertical_z.begin(), vertical_z.begin() + k, vertical_z.end());
+    return vertical_z[k];
+  };
+  double floor_z = fc.floor ? *fc.floor : rank(vertical_z.size() / 200);
+  double top_z = fc.ceiling ? *fc.ceiling : rank(vertical_z.size() - 1 - vertical_z.size() / 200);
   if (!fc.floor) res.warnings.push_back("no floor in view: floor taken at the foot of the vertical structure");
   if (!fc.ceiling) res.warnings.push_back("no ceiling in view: wall height taken from the top of the vertical structure");
   watch.mark("floor_ceiling");

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <random>
 #include <stdexcept>
+#include <limits>
 #include <unordered_map>
 
 #ifdef _OPENMP
@@ -48,8 +49,80 @@ constexpr std::uint64_t kNoKey = ~std::uint64_t(0);  // packed keys use 63 bits
 
 // The voxel grid of the points point(i), i < n, whose key(i) is not kNoKey.
 // Cells are numbered in order of first occurrence: the output keeps the input's order.
+// A packed key's cell coordinates (21-bit two's complement an axis): one to
+// one with keys, so cells told apart by coordinates are those told apart by keys.
+inline Eigen::Vector3i unpackCell(std::uint64_t k) {
+  auto axis = [](std::uint64_t v) { return static_cast<int>(static_cast<std::int32_t>(static_cast<std::uint32_t>(v << 11)) >> 11); };
+  return Eigen::Vector3i(axis(k & 0x1FFFFF), axis((k >> 21) & 0x1FFFFF), axis((k >> 42) & 0x1FFFFF));
+}
+
+// downsample() through a dense index instead of a hash map, when the cells'
+// bounding box is small: bricks of 4 x 4 x 4 cells over the box (at most 2
+// entries a point plus 1M), each brick's 64 cells numbered as first met. A
+// scan meets cells brick by brick, so the lookups stay in cache. Cells are
+// numbered and summed exactly as downsample() does. False: box too large.
+template <class PointAt>
+bool downsampleDense(long long n, const PointAt& point, const std::vector<std::uint64_t>& key, Points& out) {
+  Eigen::Vector3i lo = Eigen::Vector3i::Constant(std::numeric_limits<int>::max()), hi = -lo;
+  long long valid = 0;
+  std::uint64_t last_key = kNoKey;
+  for (long long i = 0; i < n; ++i) {
+    if (key[i] == kNoKey || key[i] == last_key) continue;
+    last_key = key[i];
+    const Eigen::Vector3i c = unpackCell(key[i]);
+    lo = lo.cwiseMin(c), hi = hi.cwiseMax(c);
+    ++valid;
+  }
+  if (valid == 0) return false;
+  auto brickOf = [](int v) { return v >= 0 ? v / 4 : -((-v + 3) / 4); };  // floor(v / 4)
+  const Eigen::Vector3i blo(brickOf(lo.x()), brickOf(lo.y()), brickOf(lo.z()));
+  const Eigen::Vector3i dims = Eigen::Vector3i(brickOf(hi.x()), brickOf(hi.y()), brickOf(hi.z())) - blo + Eigen::Vector3i::Ones();
+  const double volume = static_cast<double>(dims.x()) * dims.y() * dims.z();
+  if (volume > 2.0 * static_cast<double>(n) + (1 << 20)) return false;
+  std::vector<std::uint32_t> brick(static_cast<std::size_t>(volume), CellMap::kNone);
+  std::vector<std::uint32_t> cell;  // brick x 64 -> cell
+  std::vector<Eigen::Vector3d> sum;
+  std::vector<int> count;
+  last_key = kNoKey;
+  std::uint32_t last_id = 0;
+  for (long long i = 0; i < n; ++i) {
+    if (key[i] == kNoKey) continue;
+    // A scan visits a voxel in runs of points: the run's cell is known.
+    if (key[i] != last_key) {
+      const Eigen::Vector3i c = unpackCell(key[i]);
+      const Eigen::Vector3i b(brickOf(c.x()), brickOf(c.y()), brickOf(c.z()));
+      std::uint32_t& k = brick[(static_cast<std::size_t>(b.z() - blo.z()) * dims.y() + (b.y() - blo.y())) * dims.x() +
+                               (b.x() - blo.x())];
+      if (k == CellMap::kNone) {
+        k = static_cast<std::uint32_t>(cell.size() / 64);
+        cell.resize(cell.size() + 64, CellMap::kNone);
+      }
+      std::uint32_t& id = cell[64 * static_cast<std::size_t>(k) + (c.x() & 3) + 4 * (c.y() & 3) + 16 * (c.z() & 3)];
+      if (id == CellMap::kNone) {
+        id = static_cast<std::uint32_t>(sum.size());
+        sum.push_back(point(i).template cast<double>());
+        count.push_back(1);
+        last_key = key[i];
+        last_id = id;
+        continue;
+      }
+      last_key = key[i];
+      last_id = id;
+    }
+    sum[last_id] += point(i).template cast<double>();
+    ++count[last_id];
+  }
+  out.resize(sum.size());
+  for (std::size_t k = 0; k < sum.size(); ++k) out[k] = (sum[k] / count[k]).template cast<float>();
+  return true;
+}
+
 template <class PointAt>
 Points downsample(long long n, const PointAt& point, const std::vector<std::uint64_t>& key) {
+  {
+    Points out;
+    if (downsampleDense(n, point, key, out)) return out;
+  }
   // The cells are shared out among the cores by a hash of their key: each
   // numbers and sums its own over all points in input order (the same sums,
   // in the same order, as one core makes); then they are merged by first point.

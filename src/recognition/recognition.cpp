@@ -1,4 +1,5 @@
 #include "door_state_recognition/recognition/recognition.hpp"
+#include "door_state_recognition/util/radix_sort.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -233,7 +234,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       const int c = static_cast<int>(std::floor((wall.along(points[i]) - s_lo) / cell));
       if (c >= 0 && c < cols) dev.push_back({static_cast<float>(std::abs(wall.signedDistance(points[i]))), c});
     }
-    std::sort(dev.begin(), dev.end());
+    util::sortPairs(dev);  // std::sort's order, in linear time
     const int n = static_cast<int>(dev.size());
     std::vector<std::vector<int>> ranks(cols);
     for (int r = 0; r < n; ++r) ranks[dev[r].second].push_back(r);

@@ -1,12 +1,17 @@
 #include "door_state_recognition/segmentation/segmentation.hpp"
 
 #include "door_state_recognition/preprocess/cell_map.hpp"
+#include "door_state_recognition/util/radix_sort.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <limits>
 #include <cmath>
 #include <random>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace dsr {
 namespace segmentation {
@@ -61,22 +66,39 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
     auto half = [](int v) { return v >= 0 ? v / 2 : -((-v + 1) / 2); };
     return Eigen::Vector3i(half(k3.x()), half(k3.y()), half(k3.z()));
   };
-  preprocess::CellMap coarse_map(cells / 4 + 1);
+  // The grid's own coarse level when it has one (a dense index, see
+  // NeighbourGrid::coarseCells), else a hash map of coarse cells here. Either
+  // way a coarse cell's moments are its cells' added in cell order.
+  const bool grid_coarse = grid.coarseCells() > 0;
+  preprocess::CellMap coarse_map(grid_coarse ? 1 : cells / 4 + 1);
   std::vector<Moments> cm;
   std::vector<std::uint32_t> coarse_of(cells);
-  cm.reserve(cells / 4 + 1);
-  std::uint64_t last_key = ~std::uint64_t(0);  // no packed key
-  std::uint32_t last_id = 0;
-  for (std::size_t c = 0; c < cells; ++c) {
-    const Eigen::Vector3i q = coarseOf(c);
-    // Cells come in scan order: runs of them share a coarse cell.
-    const std::uint64_t key = preprocess::packCell(q.x(), q.y(), q.z());
-    const std::uint32_t id = key == last_key ? last_id : coarse_map.insert(key);
-    last_key = key;
-    last_id = id;
-    if (id == cm.size()) cm.emplace_back();
-    cm[id].add(m[c]);
-    coarse_of[c] = id;
+  std::vector<Eigen::Vector3i> ccoord;
+  if (grid_coarse) {
+    cm.resize(grid.coarseCells());
+    ccoord.resize(grid.coarseCells());
+    for (std::size_t c = 0; c < cells; ++c) {
+      coarse_of[c] = grid.coarseOf(c);
+      cm[coarse_of[c]].add(m[c]);
+    }
+    for (std::size_t q = 0; q < ccoord.size(); ++q) ccoord[q] = grid.coarseCoord(q);
+  } else {
+    cm.reserve(cells / 4 + 1);
+    std::uint64_t last_key = ~std::uint64_t(0);  // no packed key
+    std::uint32_t last_id = 0;
+    for (std::size_t c = 0; c < cells; ++c) {
+      const Eigen::Vector3i q = coarseOf(c);
+      // Cells come in scan order: runs of them share a coarse cell.
+      const std::uint64_t key = preprocess::packCell(q.x(), q.y(), q.z());
+      const std::uint32_t id = key == last_key ? last_id : coarse_map.insert(key);
+      last_key = key;
+      last_id = id;
+      if (id == cm.size()) cm.emplace_back();
+      cm[id].add(m[c]);
+      coarse_of[c] = id;
+    }
+    ccoord.resize(cm.size());
+    for (std::size_t c = 0; c < cells; ++c) ccoord[coarse_of[c]] = coarseOf(c);
   }
   const int need = std::min(k, 8);
   struct Pca {
@@ -100,8 +122,6 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
   };
   // Coarse normals first: the 3 x 3 x 3 coarse cells around each coarse cell.
   std::vector<Pca> coarse(cm.size());
-  std::vector<Eigen::Vector3i> ccoord(cm.size());
-  for (std::size_t c = 0; c < cells; ++c) ccoord[coarse_of[c]] = coarseOf(c);
 #pragma omp parallel for schedule(dynamic, 256)
   for (long long i = 0; i < static_cast<long long>(cm.size()); ++i) {
     Moments acc;
@@ -109,7 +129,8 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
     for (int dz = -1; dz <= 1; ++dz)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
-          const std::uint32_t o = coarse_map.find(preprocess::packCell(q.x() + dx, q.y() + dy, q.z() + dz));
+          const std::uint32_t o = grid_coarse ? grid.findCoarse(q.x() + dx, q.y() + dy, q.z() + dz)
+                                              : coarse_map.find(preprocess::packCell(q.x() + dx, q.y() + dy, q.z() + dz));
           if (o != preprocess::CellMap::kNone) acc.add(cm[o]);
         }
     coarse[i] = pca(acc);
@@ -255,7 +276,7 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
   // Split along the wall at gaps wider than wall_gap.
   std::vector<std::pair<double, int>> along;
   for (int i : inliers) along.push_back({(Eigen::Vector2d(points[i].x(), points[i].y()) - point).dot(direction), i});
-  std::sort(along.begin(), along.end());
+  util::sortPairs(along);  // std::sort's order, in linear time
   std::size_t start = 0;
   for (std::size_t k = 1; k <= along.size(); ++k) {
     if (k < along.size() && along[k].first - along[k - 1].first <= p.wall_gap) continue;
@@ -329,6 +350,7 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
     if (std::abs(normals.n[i].z()) < p.vertical_normal_z && points[i].z() > floor_z + 0.05) pool.push_back(static_cast<int>(i));
   std::vector<WallPlane> walls;
   std::mt19937 rng(static_cast<unsigned>(p.random_seed));
+  std::vector<float> sx, sy, snx, sny;  // the scored sample, side by side
   for (int round = 0; round < 4 * p.max_walls && static_cast<int>(walls.size()) < p.max_walls; ++round) {
     if (static_cast<int>(pool.size()) < p.min_wall_points) break;
     // 1-point RANSAC: a point with its (horizontal) normal proposes a plane.
@@ -340,19 +362,46 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
     // Adaptive: stop once a plane larger than the best would have been drawn
     // with probability 0.999 (capped by ransac_iterations).
     int needed = p.ransac_iterations;
+    // The scored sample (every stride-th point of the pool) in arrays of
+    // x, y and the normal's x, y, read in turn instead of gathered.
+    sx.clear(), sy.clear(), snx.clear(), sny.clear();
+    for (std::size_t j = 0; j < pool.size(); j += stride) {
+      const int i = pool[j];
+      sx.push_back(points[i].x()), sy.push_back(points[i].y());
+      snx.push_back(normals.n[i].x()), sny.push_back(normals.n[i].y());
+    }
+    const std::size_t ns = sx.size();
+    const double wd = p.wall_distance, agree = p.wall_normal_agreement;
     for (int it = 0; it < std::min(needed, p.ransac_iterations); ++it) {
       const int s = pool[pick(rng)];
       Eigen::Vector2d n(normals.n[s].x(), normals.n[s].y());
       if (n.norm() < 0.5) continue;
       n.normalize();
       const Eigen::Vector2d q(points[s].x(), points[s].y());
-      std::size_t count = 0;
-      for (std::size_t j = 0; j < pool.size(); j += stride) {
-        const int i = pool[j];
-        const Eigen::Vector2d r(points[i].x(), points[i].y());
-        if (std::abs((r - q).dot(n)) < p.wall_distance &&
-            std::abs(n.x() * normals.n[i].x() + n.y() * normals.n[i].y()) > p.wall_normal_agreement)
-          ++count;
+      // |(r - q) . n| < wall_distance and |n . n_i| > agreement, without branches.
+      const double qx = q.x(), qy = q.y(), nx = n.x(), ny = n.y();
+      std::size_t count = 0, j = 0;
+#if defined(__SSE2__)
+      {  // two at a time: the same double operations, in the same order
+        const __m128d vqx = _mm_set1_pd(qx), vqy = _mm_set1_pd(qy), vnx = _mm_set1_pd(nx), vny = _mm_set1_pd(ny);
+        const __m128d vwd = _mm_set1_pd(wd), vag = _mm_set1_pd(agree);
+        const __m128d abs_mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
+        auto load2 = [](const float* f) { return _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(f)))); };
+        for (; j + 2 <= ns; j += 2) {
+          const __m128d dist = _mm_add_pd(_mm_mul_pd(_mm_sub_pd(load2(&sx[j]), vqx), vnx),
+                                          _mm_mul_pd(_mm_sub_pd(load2(&sy[j]), vqy), vny));
+          const __m128d dot = _mm_add_pd(_mm_mul_pd(vnx, load2(&snx[j])), _mm_mul_pd(vny, load2(&sny[j])));
+          const __m128d in = _mm_and_pd(_mm_cmplt_pd(_mm_and_pd(dist, abs_mask), vwd),
+                                        _mm_cmpgt_pd(_mm_and_pd(dot, abs_mask), vag));
+          const int bits = _mm_movemask_pd(in);
+          count += static_cast<std::size_t>((bits & 1) + (bits >> 1));
+        }
+      }
+#endif
+      for (; j < ns; ++j) {
+        const double dist = (static_cast<double>(sx[j]) - qx) * nx + (static_cast<double>(sy[j]) - qy) * ny;
+        const double dot = nx * static_cast<double>(snx[j]) + ny * static_cast<double>(sny[j]);
+        count += static_cast<std::size_t>((std::abs(dist) < wd) & (std::abs(dot) > agree));
       }
       if (count > best_count) {
         best_count = count, best_pt = q, best_n = n;
@@ -413,7 +462,8 @@ std::vector<std::vector<int>> growRegions(const Points& points, const Normals& n
     for (const int* it = grid.cellBegin(c); it != grid.cellEnd(c); ++it) live[c] |= mask[*it] != 0;
     if (live[c] && curv[c] <= p.region_curvature && cn[c].squaredNorm() > 0.25f) order.push_back(static_cast<int>(c));
   }
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return curv[a] < curv[b]; });
+  // By curvature, ties in cell order: a stable sort, by radix.
+  util::radixSortBy(order, [&](int c) { return static_cast<std::uint64_t>(util::orderedBits(curv[c])); });
   std::vector<int> label(cells, -1);
   std::vector<std::vector<int>> regions;
   std::vector<std::uint32_t> nbs;

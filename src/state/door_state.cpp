@@ -45,6 +45,15 @@ double fastAtan2Deg(double y, double x) {
 }
 constexpr double kBearingSlackDeg = 0.01;
 
+// An upper bound of asin(x), x in [0, 1], within 2% for x <= 0.5: asin's
+// series x + x^3/6 + 3x^5/40 + ... has no coefficient above 1/6 after the
+// first, so it is at most x + x^3 / (6 (1 - x^2)); capped at pi / 2. An arc
+// widened by it holds every angle asin's would (the tests decide).
+inline double asinAbove(double x) {
+  if (x >= 1) return M_PI / 2;
+  return std::min(M_PI / 2, x + x * x * x / (6 * (1 - x * x)));
+}
+
 // f(0) ... f(n - 1) as OpenMP tasks: run by the threads of the enclosing
 // parallel region as they come free (findDoors runs doorways over the cores,
 // so one doorway's search is shared by a core left idle), or in turn outside
@@ -314,8 +323,8 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
         for (int ai = 0; ai < w.count; ++ai) test(ai);
         continue;
       }
-      const double below = std::asin(tol / rho) * 180 / M_PI + kBearingSlackDeg;
-      const double above = std::asin(band_hw / rho) * 180 / M_PI + kBearingSlackDeg;
+      const double below = asinAbove(tol / rho) * 180 / M_PI + kBearingSlackDeg;
+      const double above = asinAbove(band_hw / rho) * 180 / M_PI + kBearingSlackDeg;
       forArc(w, c - below, c + above, test);
     }
   };
@@ -366,7 +375,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       const double lo = c0 + std::min(0.0, span), hi = lo + std::abs(span);
       // The leaf's mid-line passes a point X of the chord (bearing c, distance
       // rho) at th = c + asin(lt / 2 / rho): the arc widens on one side only.
-      const double dl = std::asin(std::min(1.0, lt / 2 / rho_min)) * 180 / M_PI + kBearingSlackDeg;
+      const double dl = asinAbove(std::min(1.0, lt / 2 / rho_min)) * 180 / M_PI + kBearingSlackDeg;
       forArc(w, lo - kBearingSlackDeg, hi + dl, test);
     }
   };
@@ -387,6 +396,113 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
         if (i + 1 >= na_min && acc > out.score) out = {static_cast<double>(acc), cells_seen, contra, i + 1};
       }
     }
+  };
+
+  // The hinges of the local search all at once: the same angles at hinges
+  // 2 cm apart along the wall (w[i].s_h = s_center + (i - reach) 0.02, one
+  // d_h). For one point or ray and one angle, the tests below are linear in
+  // the hinge's position along the wall: each passes only on an interval of
+  // it, so each point and ray is tested (exactly, as scorePoints and
+  // scoreRays test it) only at the hinges of that interval, widened by
+  // kShiftSlack; the result is the same as testing it at every hinge. The
+  // angles are the tasks (over the cores).
+  // Points (support) when need is null; else rays (contradiction) at the
+  // hinges and angles where (*need)[hinge][angle].
+  auto scoreShifts = [&](std::vector<HingeRun>& ws, int reach, double s_center, const std::vector<std::vector<char>>* need) {
+    const int ns = static_cast<int>(ws.size()), count = ws.front().count;
+    const double d_h = ws.front().d_h;
+    std::vector<std::vector<Eigen::Vector2d>> E(ns), K(ns), P(ns);
+    for (int i = 0; i < ns; ++i) {
+      axes(ws[i], E[i], K[i], P[i]);
+      (need ? ws[i].con : ws[i].sup).assign(static_cast<std::size_t>(count) * na_max, 0);
+    }
+    // Rounding moves the ends of an interval by far less than a micrometre
+    // (coefficients below kTiny are not used, and rays within 1e-3 of
+    // parallel to the leaf are tested at every hinge): widened by a whole
+    // hinge step, an interval holds every hinge a test could pass at.
+    constexpr double kShiftSlack = 0.02, kTiny = 1e-3;
+    // Hinges i whose s_h lies within [lo, hi], as [i0, i1] (empty: i0 > i1).
+    auto hingeRange = [&](double lo, double hi, int& i0, int& i1) {
+      const double f0 = std::max(-1.0, (lo - s_center) / 0.02 + reach), f1 = std::min(static_cast<double>(ns), (hi - s_center) / 0.02 + reach);
+      i0 = std::max(0, static_cast<int>(std::ceil(f0)));
+      i1 = std::min(ns - 1, static_cast<int>(std::floor(f1)));
+    };
+    // x with c0 + c1 x in [lo, hi], widened by kShiftSlack, intersected into
+    // [xlo, xhi] (no bound when c1 is too small to tell).
+    auto clip = [&](double c0, double c1, double lo, double hi, double& xlo, double& xhi) {
+      if (std::abs(c1) < kTiny) return;
+      double a = (lo - c0) / c1, b = (hi - c0) / c1;
+      if (a > b) std::swap(a, b);
+      xlo = std::max(xlo, a - kShiftSlack);
+      xhi = std::min(xhi, b + kShiftSlack);
+    };
+    const double inf = std::numeric_limits<double>::infinity();
+    forEachTask(static_cast<std::size_t>(count), [&](std::size_t task) {
+      const int ai = static_cast<int>(task);
+      std::vector<char> seen(static_cast<std::size_t>(ns) * cells, 0), blocked(static_cast<std::size_t>(ns) * cells, 0);
+      const Eigen::Vector2d Ea = E[0][ai], Ka = K[0][ai];
+      if (!need) {
+        for (const Local& q : pts) {
+          // r = (q.s - s_h, q.d - d_h): a = r.E and b = r.K are linear in x = q.s - s_h.
+          const double dy = q.d - d_h;
+          double xlo = -inf, xhi = inf;
+          clip(dy * Ea.y(), Ea.x(), 0.02, Lmax, xlo, xhi);
+          clip(dy * Ka.y(), Ka.x(), -tol, lt + tol, xlo, xhi);
+          if (xlo > xhi) continue;
+          int i0, i1;
+          hingeRange(q.s - xhi, q.s - xlo, i0, i1);
+          for (int i = i0; i <= i1; ++i) {
+            const HingeRun& w = ws[i];
+            const Eigen::Vector2d r(q.s - w.s_h, q.d - w.d_h);
+            const double a = r.dot(E[i][ai]), b = r.dot(K[i][ai]);
+            if (a < 0.02 || a >= Lmax || b < -tol || b > lt + tol) continue;
+            const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
+            char& f = seen[static_cast<std::size_t>(i) * cells + static_cast<std::size_t>(ab) * nz + q.zbin];
+            if (!f) f = 1, ++ws[i].sup[static_cast<std::size_t>(ai) * na_max + ab];
+          }
+        }
+        return;
+      }
+      bool any = false;
+      for (int i = 0; i < ns; ++i) any |= (*need)[i][ai] != 0;
+      if (!any) return;
+      for (const Ray& ray : rays) {
+        const Eigen::Vector2d r = ray.q - ray.v;
+        const double denom = r.x() * Ea.y() - r.y() * Ea.x();
+        if (std::abs(denom) < 1e-9) continue;  // crossLeaf: parallel, crosses at no hinge
+        const double lam_max = 1 - 0.06 / ray.len, dz = ray.qz - ray.vz;
+        // w = P - v: w.y the same at every hinge, w.x = s_h + (K.x lt / 2 - v.x) =: s_h + off.
+        const double wy = P[0][ai].y() - ray.v.y(), off = Ka.x() * (lt / 2) - ray.v.x();
+        // lam = (w.x E.y - w.y E.x) / denom in (0, lam_max], and z = vz + lam dz in [z0, z1).
+        double llo = 0, lhi = lam_max;
+        if (std::abs(dz) >= kTiny) {
+          double za = (z0 - ray.vz) / dz, zb = (z1 - ray.vz) / dz;
+          if (za > zb) std::swap(za, zb);
+          llo = std::max(llo, za), lhi = std::min(lhi, zb);
+        }
+        if (llo > lhi + 1e-9) continue;
+        double xlo = -inf, xhi = inf;  // x = w.x
+        if (std::abs(denom) >= kTiny) {
+          clip(-wy * Ea.x() / denom, Ea.y() / denom, llo, lhi, xlo, xhi);
+          // a = (w.x r.y - w.y r.x) / denom in [0.05, Lmax).
+          clip(-wy * r.x() / denom, r.y() / denom, 0.05, Lmax, xlo, xhi);
+          if (xlo > xhi) continue;
+        }
+        int i0, i1;
+        hingeRange(xlo - off, xhi - off, i0, i1);
+        for (int i = i0; i <= i1; ++i) {
+          if (!(*need)[i][ai]) continue;
+          double a, z;
+          if (!crossLeaf(ray.v, r, ray.vz, dz, lam_max, P[i][ai], E[i][ai], a, z) || a < 0.05 || a >= Lmax || z < z0 ||
+              z >= z1)
+            continue;
+          const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
+          char& f = blocked[static_cast<std::size_t>(i) * cells + static_cast<std::size_t>(ab) * nz +
+                            std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
+          if (!f) f = 1, ++ws[i].con[static_cast<std::size_t>(ai) * na_max + ab];
+        }
+      }
+    });
   };
 
   // Global search: hinge at either jamb, either swing side, hinge on the
@@ -445,8 +561,15 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   forEachTask(global.size(), [&](std::size_t i) {
     HingeRun& w = global[i];
     std::vector<char> need(w.count, 0);
-    for (int ai = 0; ai < w.count; ++ai) need[ai] = bound(w, ai) >= lower;
-    scoreRays(w, &need);
+    bool any = false;
+    for (int ai = 0; ai < w.count; ++ai) any |= (need[ai] = bound(w, ai) >= lower) != 0;
+    // A hinge none of whose angles can be the best needs no rays at all
+    // (most hinges: the bound leaves a few dozen of a thousand hypotheses).
+    if (any) {
+      scoreRays(w, &need);
+    } else {
+      w.con.assign(static_cast<std::size_t>(w.count) * na_max, 0);
+    }
     finishScores(w, &need);
   });
   Score best;
@@ -462,21 +585,52 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   }
   // Local search: the jamb seen from the wall can be off where a leaf hides
   // or shadows its own doorway; move the hinge along the wall and the angle.
-  {
+  // It moves the angle by 2.5 deg at most: with the wall band full enough for
+  // a closed leaf (band_cov >= 0.55, below) and the best angle below
+  // closed_below_deg + 0.5, the leaf is taken closed in the band whatever it
+  // finds, and nothing it finds is used (but best_*, which then tell the
+  // global search's best): skipped.
+  const bool closed_in_band_for_sure = band_cov >= 0.55 && best_deg + 2.5 < p.closed_below_deg + 3;
+  if (!closed_in_band_for_sure) {
     const double e0 = best_h == 0 ? 1.0 : -1.0, m = best_sw == 0 ? 1.0 : -1.0;
     const double d_h = best_sw == 0 ? -best_recess : -t + best_recess;
     const double s_center = best_s, deg_center = best_deg;
     const int reach_steps = door.paired ? 3 : 15;  // 2 cm steps
     const double start = deg_center - 2.5, step = 0.5;
     std::vector<HingeRun> shifts(2 * reach_steps + 1);
-    forEachTask(shifts.size(), [&](std::size_t i) {
+    for (std::size_t i = 0; i < shifts.size(); ++i) {
       HingeRun& w = shifts[i];
       w.s_h = s_center + (static_cast<int>(i) - reach_steps) * 0.02;
       w.d_h = d_h, w.e0 = e0, w.m = m, w.start = start, w.step = step, w.count = 11;
-      scorePoints(w);
-      scoreRays(w, nullptr);
-      finishScores(w, nullptr);
-    });
+    }
+    // Support first. A hypothesis replaces the best only when it scores
+    // more, and it scores no more than its support (bound): rays are tested
+    // only where the bound beats the global search's best, and at angles
+    // within [0, 170] deg (the others are never taken).
+    // Few hinges (a paired doorway): each on its own costs less.
+    if (reach_steps > 3) {
+      scoreShifts(shifts, reach_steps, s_center, nullptr);
+    } else {
+      forEachTask(shifts.size(), [&](std::size_t i) { scorePoints(shifts[i]); });
+    }
+    std::vector<std::vector<char>> need(shifts.size(), std::vector<char>(11, 0));
+    for (std::size_t i = 0; i < shifts.size(); ++i)
+      for (int ai = 0; ai < 11; ++ai) {
+        const double deg = start + ai * step;
+        need[i][ai] = deg >= 0 && deg <= 170 && bound(shifts[i], ai) > best.score;
+      }
+    if (reach_steps > 3) {
+      scoreShifts(shifts, reach_steps, s_center, &need);
+    } else {
+      forEachTask(shifts.size(), [&](std::size_t i) {
+        if (std::find(need[i].begin(), need[i].end(), 1) != need[i].end()) {
+          scoreRays(shifts[i], &need[i]);
+        } else {
+          shifts[i].con.assign(static_cast<std::size_t>(shifts[i].count) * na_max, 0);
+        }
+      });
+    }
+    for (std::size_t i = 0; i < shifts.size(); ++i) finishScores(shifts[i], &need[i]);
     for (int ds = -reach_steps; ds <= reach_steps; ++ds) {
       const double s_h = s_center + ds * 0.02;
       for (int ai = 0; ai < 11; ++ai) {

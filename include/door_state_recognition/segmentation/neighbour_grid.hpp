@@ -40,8 +40,32 @@ class NeighbourGrid {
   // The occupied cells of the (2 ring + 1)^3 block around c, c included.
   void neighbourCells(std::size_t c, int ring, std::vector<std::uint32_t>& cells) const;
 
+  // Coarse cells (twice the edge: cell coordinates halved, rounded down),
+  // indexed densely over their bounding box when that box is small (and
+  // within +-2^20 cells, where no packed key wraps). Then every lookup is two
+  // loads (the coarse cell in the box, the cell among its 8) instead of a
+  // hash probe, and coarseCells() > 0; otherwise the hash map serves and the
+  // coarse level is not built (coarseCells() == 0). Numbering does not
+  // depend on which serves: cells are numbered in order of first point.
+  std::size_t coarseCells() const { return coarse_coord_.size(); }
+  std::uint32_t coarseOf(std::size_t c) const { return coarse_of_[c]; }
+  const Eigen::Vector3i& coarseCoord(std::size_t k) const { return coarse_coord_[k]; }
+  // The coarse cell at coarse coordinates (x, y, z), or CellMap::kNone; only
+  // when coarseCells() > 0.
+  std::uint32_t findCoarse(int x, int y, int z) const {
+    const long long rx = static_cast<long long>(x) - lo_.x(), ry = static_cast<long long>(y) - lo_.y(),
+                    rz = static_cast<long long>(z) - lo_.z();
+    if (rx < 0 || ry < 0 || rz < 0 || rx >= dims_.x() || ry >= dims_.y() || rz >= dims_.z())
+      return preprocess::CellMap::kNone;
+    return dense_[(static_cast<std::size_t>(rz) * dims_.y() + static_cast<std::size_t>(ry)) * dims_.x() +
+                  static_cast<std::size_t>(rx)];
+  }
+  static int half(int v) { return v >= 0 ? v / 2 : -((-v + 1) / 2); }
+
  private:
   std::uint32_t findCell(int x, int y, int z) const;
+  bool buildDense(const std::vector<Eigen::Vector3f>& points, std::vector<std::uint32_t>& count,
+                  std::vector<std::uint32_t>& cell_of);
   float cell_ = 1;
   double inv_ = 1;
   std::vector<Eigen::Vector3f> pos_;   // points in cell order
@@ -49,7 +73,13 @@ class NeighbourGrid {
   std::vector<int> slot_;              // point index -> cell order
   std::vector<std::uint32_t> begin_;   // cell -> first slot; cells() + 1 entries
   std::vector<Eigen::Vector3i> coord_; // cell -> integer coordinates
-  preprocess::CellMap map_{1};         // packed cell key -> cell
+  preprocess::CellMap map_{1};         // packed cell key -> cell (when not dense)
+  // Dense coarse index (see coarseCells).
+  Eigen::Vector3i lo_ = Eigen::Vector3i::Zero(), dims_ = Eigen::Vector3i::Zero();
+  std::vector<std::uint32_t> dense_;         // coarse box -> coarse cell
+  std::vector<std::uint32_t> children_;      // coarse cell x 8 -> cell (x&1 + 2 (y&1) + 4 (z&1))
+  std::vector<std::uint32_t> coarse_of_;     // cell -> coarse cell
+  std::vector<Eigen::Vector3i> coarse_coord_;// coarse cell -> coarse coordinates
 };
 
 }  // namespace segmentation

@@ -37,7 +37,10 @@ struct LeafFit {
   double length = 0, top_z = 0;
   double s_hinge = 0, s_latch = 0;  // the doorway's jambs along the wall, refined by the fit
   double face_d = 0;            // closed leaf: depth of its visible face (<= 0, behind the wall face)
-  double best_angle_deg = 0, best_coverage = 0, best_contradiction = 0;  // best hypothesis, found or not
+  // Best hypothesis, found or not (for a leaf closed in the wall band with
+  // the global search's best below closed_below_deg + 0.5, that search's best:
+  // the local search is skipped).
+  double best_angle_deg = 0, best_coverage = 0, best_contradiction = 0;
   int candidate_points = 0, candidate_rays = 0;  // points near the doorway, rays passing it
   // Leaf found off the wall: share of the points near the doorway that hide
   // it from the sensor (in front of the wall, sight line meeting the wall
