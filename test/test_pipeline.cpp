@@ -371,6 +371,22 @@ TEST(DoorState, ALeafSwungTowardsTheSensorIsSoughtDeeperThanAThinMeasuredWall) {
   EXPECT_LT(m->hinge_error_m, 0.1);
 }
 
+TEST(DoorState, AClosedLeafTooSparseForTheWallBandStillHasItsClosedEvidence) {
+  // Seed 1002 at 100k rays, door 0: closed and set back in a wall 6 m off,
+  // sampled so sparsely that the points in the wall band cover too little
+  // of the doorway for a closed leaf found there; the general search finds
+  // it at 0 deg, and a closed leaf takes a closed leaf's evidence (here the
+  // recess), wherever it was found.
+  const std::uint64_t seed = 1002;
+  const Scored s = runScene(sim::randomRoom(seed), seed, "tls", 100000);
+  SCOPED_TRACE(::testing::Message() << "seed=" << seed << " (100k rays) " << describe(s) << trace(s));
+  ASSERT_EQ(s.truth["doors"][0]["state"], "closed");
+  EXPECT_EQ(s.eval.reported_doors, s.eval.matched);
+  const eval::DoorMatch* m = matchOf(s, 0);
+  ASSERT_NE(m, nullptr);
+  EXPECT_TRUE(m->state_correct);
+}
+
 TEST(DoorState, PaperScenesGetThePapersStates) {
   // Table 4 of the paper: livingroom 1 closed; house 1 open (110.6 deg);
   // multiple doors 2 semi-open (7.2 and 25.3 deg). Counts and states as the
