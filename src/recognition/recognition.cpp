@@ -191,8 +191,7 @@ std::vector<SetBack> setBackPanels(const Points& points, const segmentation::Wal
 
 }  // namespace
 
-// A trim leg's mean depth above its neighbours', in casing_min_offset.
-constexpr double kLegAboveSides = 0.5;
+// Points a trim leg out of the plane needs where its neighbours are seen.
 constexpr int kLegMinPoints = 10;
 // A run wider than a door, this share of whose unseen cells lie in the
 // shadow of something in front: maybe a leaf's shadow over its doorway.
@@ -416,20 +415,16 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
         if (std::isfinite(mean[k])) sum += mean[k], ++n;
       return n >= 2 ? sum / n : std::numeric_limits<double>::quiet_NaN();
     };
-    // A leg out of the plane must stand out of its neighbours too, where
-    // they are seen: its mean depth above the higher of the neighbours'
-    // means 8-14 cm off, over kLegMinPoints points at least (a sub-column
-    // the voxel grid left with a handful of points stands out by chance).
+    // A leg out of the plane needs kLegMinPoints points where a neighbour
+    // 8-14 cm off is seen (a sub-column the voxel grid left with a handful
+    // of points stands out by chance).
     legs.erase(std::remove_if(legs.begin(), legs.end(),
                               [&](const std::pair<int, int>& g) {
-                                double sum = 0;
                                 int n = 0;
-                                for (int k = g.first; k <= g.second; ++k) sum += face_d_sum[k], n += face_d_n[k];
-                                const double l = side(g.first - 7, g.first - 4), r = side(g.second + 4, g.second + 7);
-                                double level = -std::numeric_limits<double>::infinity();
-                                if (std::isfinite(l)) level = l;
-                                if (std::isfinite(r)) level = std::max(level, r);
-                                return std::isfinite(level) && n < kLegMinPoints;
+                                for (int k = g.first; k <= g.second; ++k) n += face_d_n[k];
+                                const bool sides_seen = std::isfinite(side(g.first - 7, g.first - 4)) ||
+                                                        std::isfinite(side(g.second + 4, g.second + 7));
+                                return sides_seen && n < kLegMinPoints;
                               }),
                legs.end());
     auto stands_out = [&](int c) {
