@@ -411,12 +411,44 @@ TEST(DoorState, ASparseScanFindsTheHeadTrimOfAClosedDoor) {
   }
 }
 
+TEST(DoorState, AHeadTrimStraddlingTwoGridRowsIsFound) {
+  // Seed 1018 at 1M rays, door 0: closed, recessed 9 cm, trim on both
+  // sides. The head's trim (7 cm high) straddles two 5 cm rows of the
+  // wall's grid and fills 68 % and 63 % of their face points, short of the
+  // 70 % a head needs; a row slid up by 1 cm lies within the trim.
+  const std::uint64_t seed = 1018;
+  const Scored s = runScene(sim::randomRoom(seed), seed, "tls", 1000000);
+  SCOPED_TRACE(::testing::Message() << "seed=" << seed << " (1M rays) " << describe(s) << trace(s));
+  ASSERT_EQ(s.truth["doors"][0]["state"], "closed");
+  EXPECT_EQ(s.eval.reported_doors, s.eval.matched);
+  const eval::DoorMatch* m = matchOf(s, 0);
+  ASSERT_NE(m, nullptr);
+  EXPECT_TRUE(m->state_correct);
+}
+
+TEST(DoorState, ALeafHidingTheTrimAtItsHingeIsFittedAsInAnUnpairedDoorway) {
+  // Seed 1009, door 0: open 125 deg towards the scanner. The leaf hides the
+  // trim at its hinge; the legs paired under the head put the doorway 8 cm
+  // off at the hinge and 5 cm wide of it, and the leaf pinned to them was
+  // contradicted by 10 % of its cells. Seen (coverage 0.45) but not fitted,
+  // it is searched with hinge and length free.
+  const std::uint64_t seed = 1009;
+  const Scored s = runScene(sim::randomRoom(seed), seed, "tls");
+  SCOPED_TRACE(::testing::Message() << "seed=" << seed << " " << describe(s) << trace(s));
+  ASSERT_EQ(s.truth["doors"][0]["swing"], "toward_viewer");
+  EXPECT_EQ(s.eval.reported_doors, s.eval.matched);
+  const eval::DoorMatch* m = matchOf(s, 0);
+  ASSERT_NE(m, nullptr);
+  EXPECT_TRUE(m->state_correct);
+  EXPECT_LT(m->angle_error_deg, 3.0);
+}
+
 TEST(DoorState, PaperScenesGetThePapersStates) {
   // Table 4 of the paper: livingroom 1 closed; house 1 open (110.6 deg);
   // multiple doors 2 semi-open (7.2 and 25.3 deg). Counts and states as the
   // paper's; angles within 5 deg (the 7.2 deg leaf comes out at 12: its
   // doorway is found short, see the README).
-  for (const std::string name : sim::paperRoomNames()) {
+  for (const std::string& name : sim::paperRoomNames()) {
     const Scored s = runScene(sim::paperRoom(name), 11, "tls");
     SCOPED_TRACE(name + " " + describe(s) + trace(s));
     EXPECT_EQ(s.eval.reported_doors, s.eval.true_doors);

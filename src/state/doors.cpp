@@ -159,6 +159,19 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
                                 (d.front >= kOwnLeafFront && mayBeOwnLeaf(pts, walls[c.wall], d, floor_z, viewpoint, p));
     c.leaf = fitLeaf(pts, walls[c.wall], d, floor_z, thicknessOf(d), viewpoint, p,
                             other_evidence ? 0.0 : kClosedBandEvidence, view);
+    // Trim legs pin the leaf's hinge and length to the doorway between them
+    // (a few centimetres of play). A leg may be off: a leaf swung past 90 deg
+    // towards the sensor hides the trim at its hinge and stands out of the
+    // face there like trim. Where the leaf is seen (the best hypothesis
+    // covers enough cells) but no pinned hypothesis fits, the doorway is
+    // searched as if unpaired: hinge and length free (seed 1009, door 0).
+    if (!c.leaf.found && d.paired && c.leaf.best_coverage >= p.min_leaf_coverage) {
+      recognition::Doorway loose = d;
+      loose.paired = false;
+      LeafFit again = fitLeaf(pts, walls[c.wall], loose, floor_z, thicknessOf(d), viewpoint, p,
+                              other_evidence ? 0.0 : kClosedBandEvidence, view);
+      if (again.found) c.leaf = again;
+    }
   });
   for (const Candidate& cand : candidates) {
     {
