@@ -471,12 +471,6 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     std::vector<int> above;
     bool seen = false;
     for (int r = body1; r < rows; ++r) {
-      int f = 0, o = 0;
-      for (int c = c0; c <= c1; ++c) {
-        const Cell& g = grid[static_cast<std::size_t>(r) * cols + c];
-        f += g.face;
-        o += g.out;
-      }
       const int covered = row_covered[r];
       // Rows below a door's head show its leaf or opening, not the head:
       // only rows from kHeadSeenFrom up tell that a head would have been seen.
@@ -496,25 +490,24 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
         std::nth_element(above.begin(), above.begin() + above.size() / 2, above.end());
         if (above[above.size() / 2] <= 0.5 * ncols) share = 0.3;
       }
-      if (f >= 5 && o >= 0.7 * f && covered >= share * ncols) return 1;
-      // The same test on the row slid up by k fifths of its height: a trim
-      // 7 cm high straddling two rows fills at most 70 % of either (seed
-      // 1018 at 1M rays: 68 % and 63 %), but all of a row slid into it.
-      for (int k = 1; k < kFine; ++k) {
-        const int w0 = (r - body1) * kFine + k;  // first fine row of the slid row
+      // The row and the row slid up by k fifths of its height: a trim 7 cm
+      // high straddling two rows fills at most 70 % of either (seed 1018 at
+      // 1M rays: 68 % and 63 %), but all of a row slid into it.
+      for (int k = 0; k < kFine; ++k) {
+        const int w0 = (r - body1) * kFine + k;  // first fine row of the (slid) row
         if (w0 + kFine > fine_n) break;
-        int ff = 0, fo = 0, fc = 0;
+        int f = 0, o = 0, cov = 0;
         for (int c = c0; c <= c1; ++c) {
           int cf = 0;
           for (int j = w0; j < w0 + kFine; ++j) {
             const auto& h = head_fine[static_cast<std::size_t>(j) * cols + c];
             cf += h.first;
-            fo += h.second;
+            o += h.second;
           }
-          ff += cf;
-          fc += cf > 0;
+          f += cf;
+          cov += cf > 0;
         }
-        if (ff >= 5 && fo >= 0.7 * ff && fc >= share * ncols) return 1;
+        if (f >= 5 && o >= 0.7 * f && cov >= share * ncols) return 1;
       }
     }
     return seen ? 0 : -1;
