@@ -457,6 +457,30 @@ TEST(DoorState, CameraFramesShowDoorsThroughNoiseAndACutView) {
   }
 }
 
+TEST(DoorState, ACameraLookingThroughADoorwayIntoNothingInRangeSeesItOpen) {
+  // Camera frames (the sweep's seeds) of a doorway whose room beyond is out
+  // of range: its body returns nothing over more than 0.6 m, which left its
+  // columns unseen (as if outside the view) and the run of open columns too
+  // narrow for a door. Cells inside the view (between the lowest and the
+  // highest return on their bearing) without any return were looked at:
+  // nothing there in range. 2017: leaf swung away 80 deg; 4004: open 114 deg
+  // towards the camera (before, a door was reported off its doorway).
+  struct Case {
+    std::uint64_t seed;
+    const char* state;
+  };
+  for (const Case c : {Case{2017, "semi_open"}, Case{4004, "open"}}) {
+    const Scored s = runScene(sim::randomRoom(c.seed), c.seed, "rgbd");
+    SCOPED_TRACE(::testing::Message() << "seed=" << c.seed << " " << describe(s) << trace(s));
+    EXPECT_EQ(s.eval.true_doors, 1);
+    EXPECT_EQ(s.eval.matched, 1);
+    EXPECT_EQ(s.eval.reported_doors, 1);
+    EXPECT_EQ(s.eval.state_correct, s.eval.matched);
+    ASSERT_EQ(s.result.doors.size(), 1u);
+    EXPECT_EQ(toString(s.result.doors[0].state), std::string(c.state));
+  }
+}
+
 TEST(DoorState, AnUnseenLeafInADoorwaySeenThroughIsOpenByAtLeastTheFreeSpaceBound) {
   // Camera frames of doorways whose leaf swung away past 90 deg, behind the
   // wall and out of sight: no leaf is fitted, but every hypothesis short of
@@ -508,9 +532,10 @@ TEST(DoorState, CameraFramesFindTheDoorInView) {
   // 12 simulated 640x480 RGB-D frames (camera optical frame, up -y, no
   // ceiling in view), the camera looking at one door of a random room. Held at
   // what the pipeline reaches today on these seeds (precision 1.0, recall
-  // 0.83, every found state right); the issue asks for the state right in
-  // >= 90 % of frames: reached on the 30 sweep frames 1000-1029, not on
-  // 2000-2029 nor on these 12 (README).
+  // 0.92, the state right in 10 of the 11 found: 3010, open 92 deg, is
+  // taken at 88); the issue asks for the state right in >= 90 % of frames:
+  // reached on the 30 sweep frames 1000-1029, not on 2000-2029 nor on
+  // these 12 (README).
   std::vector<eval::EvalResult> all;
   std::ostringstream log;
   for (std::uint64_t seed = 3000; seed < 3012; ++seed) {
@@ -521,8 +546,8 @@ TEST(DoorState, CameraFramesFindTheDoorInView) {
   const eval::EvalResult m = eval::merge(all);
   SCOPED_TRACE(log.str());
   EXPECT_GE(m.precision(), 0.95);
-  EXPECT_GE(m.recall(), 0.8);
-  EXPECT_GE(m.stateAccuracy(), 0.95);
+  EXPECT_GE(m.recall(), 0.9);
+  EXPECT_GE(m.stateAccuracy(), 0.9);
 }
 
 // ----------------------------------------------------------------- hostile input
