@@ -127,6 +127,50 @@ TEST(Preprocess, SanitizeDropsNonFiniteAndAbsurdPoints) {
   EXPECT_EQ(out[1], Eigen::Vector3f(-4, 5, -6));
 }
 
+TEST(Preprocess, NoReturnRaysComeFromTheFittedPinholeCamera) {
+  // A 64 x 48 pinhole frame (optical frame, f = 50 px, centre (31.5, 23.5))
+  // of a plane 2 m ahead, tilted, with a block of pixels that returned
+  // nothing: their rays are those of the camera, within a pixel.
+  const int w = 64, h = 48;
+  const double f = 50, cx = 31.5, cy = 23.5;
+  pcl::PointCloud<pcl::PointXYZ> c;
+  c.width = w;
+  c.height = h;
+  c.points.resize(static_cast<std::size_t>(w) * h);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (int r = 0; r < h; ++r)
+    for (int k = 0; k < w; ++k) {
+      const Eigen::Vector3d ray((k - cx) / f, (r - cy) / f, 1.0);
+      const double t = 2.0 / (1.0 + 0.2 * ray.x());  // the plane z + 0.2 x = 2
+      const Eigen::Vector3d q = t * ray;
+      const bool hole = k >= 40 && k < 50 && r >= 10 && r < 20;
+      c.points[static_cast<std::size_t>(r) * w + k] =
+          hole ? pcl::PointXYZ(nan, nan, nan) : pcl::PointXYZ(static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z()));
+    }
+  const preprocess::Points rays = preprocess::noReturnRays(c, Eigen::Vector3f::Zero(), 1);
+  ASSERT_EQ(rays.size(), 100u);
+  std::size_t i = 0;
+  for (int r = 10; r < 20; ++r)
+    for (int k = 40; k < 50; ++k, ++i) {
+      const Eigen::Vector3f want = Eigen::Vector3d((k - cx) / f, (r - cy) / f, 1.0).normalized().cast<float>();
+      EXPECT_GT(rays[i].dot(want), std::cos(0.5 / f)) << "pixel " << k << ", " << r;
+    }
+  // Not organized, or not a pinhole camera (rows of a spinning scanner): none.
+  pcl::PointCloud<pcl::PointXYZ> flat = c;
+  flat.width = static_cast<std::uint32_t>(flat.size());
+  flat.height = 1;
+  EXPECT_TRUE(preprocess::noReturnRays(flat, Eigen::Vector3f::Zero()).empty());
+  pcl::PointCloud<pcl::PointXYZ> spin = c;
+  for (int r = 0; r < h; ++r)
+    for (int k = 0; k < w; ++k) {
+      const double az = 2 * M_PI * k / w, el = (r - cy) * 0.02;
+      spin.points[static_cast<std::size_t>(r) * w + k] = pcl::PointXYZ(static_cast<float>(3 * std::cos(az)), static_cast<float>(3 * std::sin(az)),
+                                                                      static_cast<float>(3 * std::tan(el)));
+    }
+  spin.points[5] = pcl::PointXYZ(nan, nan, nan);
+  EXPECT_TRUE(preprocess::noReturnRays(spin, Eigen::Vector3f::Zero()).empty());
+}
+
 TEST(Preprocess, VoxelGridKeepsOneCentroidPerVoxel) {
   preprocess::Points pts = {{0.01f, 0.01f, 0.01f}, {0.03f, 0.01f, 0.01f}, {0.25f, 0.0f, 0.0f}};
   const auto out = preprocess::voxelDownsample(pts, 0.1);
