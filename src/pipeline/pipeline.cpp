@@ -122,7 +122,12 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
     return res;
   }
   // A camera frame's view ends above and below: a near wall is cut by it.
-  const segmentation::ViewTop view = organized ? segmentation::viewTop(pts, viewpoint) : segmentation::ViewTop{};
+  segmentation::ViewTop view = organized ? segmentation::viewTop(pts, viewpoint) : segmentation::ViewTop{};
+  // Its pixels without a return: rays along which nothing was in range.
+  if (organized) {
+    view.no_return = preprocess::noReturnRays(cloud, viewpoint_in.cast<float>());
+    for (auto& d : view.no_return) d = R * d;
+  }
   const std::vector<segmentation::WallPlane> walls = segmentation::findWalls(
       pts, normals, floor_z, top_z, fc.ceiling.has_value(), viewpoint.head<2>().cast<double>(), p, &view);
   watch.mark("walls");

@@ -32,6 +32,63 @@ Eigen::Matrix3d levellingRotation(const Eigen::Vector3d& up) {
   return Eigen::Quaterniond::FromTwoVectors(up.normalized(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
 }
 
+Points noReturnRays(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vector3f& viewpoint, int step) {
+  Points out;
+  const int w = static_cast<int>(cloud.width), h = static_cast<int>(cloud.height);
+  if (h < 2 || w < 2 || cloud.size() != static_cast<std::size_t>(w) * h || step < 1) return out;
+  auto finite = [](const pcl::PointXYZ& q) { return std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z); };
+  // Pixel coordinates scaled to about [-1, 1].
+  const double cu = 0.5 * w, cv = 0.5 * h, sc = 0.5 * w;
+  // u = (m1 . X) / (m3 . X), v = (m2 . X) / (m3 . X), X from the viewpoint:
+  // two linear equations in m = (m1, m2, m3) per pixel, solved by the
+  // eigenvector of the smallest eigenvalue of A^T A.
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector3d>> sample;
+  const int grid = std::max(1, std::min(w, h) / 60);
+  for (int r = 0; r < h; r += grid)
+    for (int c = 0; c < w; c += grid) {
+      const pcl::PointXYZ& q = cloud.points[static_cast<std::size_t>(r) * w + c];
+      if (!finite(q)) continue;
+      const Eigen::Vector3d X = Eigen::Vector3d(q.x, q.y, q.z) - viewpoint.cast<double>();
+      if (X.norm() < 1e-3) continue;
+      sample.push_back({Eigen::Vector2d((c - cu) / sc, (r - cv) / sc), X});
+    }
+  if (sample.size() < 100) return out;
+  Eigen::Matrix<double, 9, 9> ata = Eigen::Matrix<double, 9, 9>::Zero();
+  for (const auto& [uv, X] : sample) {
+    Eigen::Matrix<double, 9, 1> a, b;
+    a << X, Eigen::Vector3d::Zero(), -uv.x() * X;
+    b << Eigen::Vector3d::Zero(), X, -uv.y() * X;
+    ata += a * a.transpose() + b * b.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 9, 9>> es(ata);
+  const Eigen::Matrix<double, 9, 1> m = es.eigenvectors().col(0);
+  Eigen::Matrix3d M;
+  M.row(0) = m.segment<3>(0).transpose();
+  M.row(1) = m.segment<3>(3).transpose();
+  M.row(2) = m.segment<3>(6).transpose();
+  if (!M.allFinite() || std::abs(M.determinant()) < 1e-12) return out;
+  // Within a pixel at nine in ten of the sampled pixels.
+  std::vector<double> err;
+  int ahead = 0;
+  for (const auto& [uv, X] : sample) {
+    const Eigen::Vector3d y = M * X;
+    ahead += y.z() > 0;
+    err.push_back(std::abs(y.z()) > 1e-12 ? (y.head<2>() / y.z() - uv).norm() * sc : 1e9);
+  }
+  std::nth_element(err.begin(), err.begin() + err.size() * 9 / 10, err.end());
+  if (!(err[err.size() * 9 / 10] <= 1.0)) return out;
+  if (2 * ahead < static_cast<int>(sample.size())) M = -M;  // m3 . X > 0 in front of the camera
+  const Eigen::Matrix3d Mi = M.inverse();
+  for (int r = 0; r < h; r += step)
+    for (int c = 0; c < w; c += step) {
+      if (finite(cloud.points[static_cast<std::size_t>(r) * w + c])) continue;
+      // M d = (u, v, 1): m3 . d = 1, in front.
+      const Eigen::Vector3d d = Mi * Eigen::Vector3d((c - cu) / sc, (r - cv) / sc, 1.0);
+      out.push_back(d.normalized().cast<float>());
+    }
+  return out;
+}
+
 Points sanitize(const pcl::PointCloud<pcl::PointXYZ>& cloud, double max_abs) {
   Points out;
   out.reserve(cloud.size());

@@ -97,6 +97,7 @@ namespace {
 // Evidence counts of one cell of a wall's grid.
 struct Cell {
   int face = 0, out = 0, through = 0, front = 0, recess = 0;  // out: face points standing out (trim)
+  bool empty_in_view = false;  // no return at all, inside a camera frame's view: nothing there in range
 };
 
 // d values near 0 towards -t at a jamb: the run of depths from the face
@@ -193,13 +194,15 @@ std::vector<SetBack> setBackPanels(const Points& points, const segmentation::Wal
 
 // Points a trim leg out of the plane needs where its neighbours are seen.
 constexpr int kLegMinPoints = 10;
+// Elevation margin (tan) inside a camera frame's view for an empty cell to count as looked at.
+constexpr float kInViewMargin = 0.01f;
 // A run wider than a door, this share of whose unseen cells lie in the
 // shadow of something in front: maybe a leaf's shadow over its doorway.
 constexpr double kShadowRun = 0.8;
 
 std::vector<Doorway> findDoorways(const Points& points, const segmentation::WallPlane& wall, double floor_z,
                                   double top_z, const Eigen::Vector3f& viewpoint, const Parameters& p,
-                                  bool no_return_is_free) {
+                                  bool no_return_is_free, const segmentation::ViewTop* view) {
   const double cell = p.grid_cell, row_h = 0.05;
   const double s_lo = wall.s_min - 0.3, s_hi = wall.s_max + 0.3;
   const int cols = std::max(1, static_cast<int>(std::ceil((s_hi - s_lo) / cell)));
@@ -352,6 +355,19 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       if (r > 0 && c > 0) front_diff[i] -= front_diff[i - (cols + 1) - 1];
       grid[static_cast<std::size_t>(r) * cols + c].front = front_diff[i];
     }
+  // A camera frame: a cell on the wall's plane without any return whose
+  // centre lies inside the view (between the lowest and the highest return
+  // on its bearing) was looked at and nothing was there in range.
+  if (no_return_is_free && view && !view->max_tan.empty())
+    for (int r = 0; r < rows; ++r)
+      for (int c = 0; c < cols; ++c) {
+        Cell& g = grid[static_cast<std::size_t>(r) * cols + c];
+        if (g.face || g.through || g.recess || g.front) continue;
+        const Eigen::Vector2d xy = wall.point + (s_lo + (c + 0.5) * cell) * wall.direction;
+        const Eigen::Vector3f q(static_cast<float>(xy.x()), static_cast<float>(xy.y()),
+                                static_cast<float>(floor_z + (r + 0.5) * row_h));
+        g.empty_in_view = view->inView(q, -kInViewMargin);
+      }
 
   // Column shares over the body of a door.
   const int nbody = std::max(1, body1 - body0);
@@ -363,7 +379,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     for (int r = body0; r < body1; ++r) {
       const Cell& g = grid[static_cast<std::size_t>(r) * cols + c];
       if (g.face) ++f;
-      else if (g.through || g.front || g.recess) ++e;
+      else if (g.through || g.front || g.recess || g.empty_in_view) ++e;
     }
     const int observed = f + e;
     const bool enough = observed >= std::max(4.0, 0.15 * nbody);

@@ -26,6 +26,9 @@ constexpr float kRefineCurvature = 0.02f;
 constexpr double kAboveCeiling = 0.3;
 constexpr std::size_t kAboveCeilingPoints = 50;
 
+// A gap in a wall's inliers with more than this share unseen splits it.
+constexpr double kGapUnknown = 0.1;
+
 // cos 15 deg: planes closer to parallel than this may shadow one another.
 constexpr double kNearParallel = 0.966;
 
@@ -271,8 +274,50 @@ bool ViewTop::inView(const Eigen::Vector3f& q, float slack) const {
 void addWallSegments(const Points& points, const std::vector<int>& inliers, const Eigen::Vector2d& point,
                      const Eigen::Vector2d& direction, const Eigen::Vector2d& normal, double floor_z, double height_top,
                      bool ceiling_known, const Parameters& p, std::vector<WallPlane>& walls,
-                     const ViewTop* view) {
+                     const ViewTop* view, const Eigen::Vector2d* viewpoint) {
   const double room_h = height_top - floor_z;
+  // What the sensor saw across a gap (a, b) in the inliers, in 5 cm bins at
+  // a door's body height: each hidden by something in front, seen through
+  // (returns behind the plane, or rays of a camera's pixels without a
+  // return), showing points near the plane, or nothing at all (unknown).
+  auto gapSeen = [&](double a, double b, double& through, double& unknown) {
+    through = 0;
+    unknown = 1;
+    if (!viewpoint) return;
+    const double vs = (*viewpoint - point).dot(direction), vd = (*viewpoint - point).dot(normal);
+    if (vd <= 0.1) return;
+    const int bins = std::max(1, static_cast<int>(std::ceil((b - a) / 0.05)));
+    std::vector<char> sh(bins, 0), th(bins, 0), any(bins, 0);
+    auto binOf = [&](double s) { return s > a && s < b ? std::min(bins - 1, static_cast<int>((s - a) / 0.05)) : -1; };
+    for (const auto& q : points) {
+      if (q.z() < floor_z + 0.25 || q.z() > floor_z + 1.75) continue;
+      const Eigen::Vector2d r(q.x() - point.x(), q.y() - point.y());
+      const double d = r.dot(normal);
+      if (d >= vd) continue;
+      const int k = binOf(vs + vd / (vd - d) * (r.dot(direction) - vs));
+      if (k < 0) continue;
+      any[k] = 1;
+      if (std::abs(d) > p.wall_distance) (d > 0 ? sh : th)[k] = 1;
+    }
+    if (view) {
+      const Eigen::Vector3f v3(static_cast<float>(viewpoint->x()), static_cast<float>(viewpoint->y()), view->viewpoint.z());
+      for (const Eigen::Vector3f& u : view->no_return) {
+        const double un = u.x() * normal.x() + u.y() * normal.y();
+        if (un >= -1e-6) continue;
+        const Eigen::Vector3f x = v3 + static_cast<float>(vd / -un) * u;
+        if (x.z() < floor_z + 0.25 || x.z() > floor_z + 1.75) continue;
+        const int k = binOf((Eigen::Vector2d(x.x(), x.y()) - point).dot(direction));
+        if (k >= 0) th[k] = 1;
+      }
+    }
+    int nt = 0, nu = 0;
+    for (int k = 0; k < bins; ++k) {
+      nt += !sh[k] && th[k];
+      nu += !sh[k] && !th[k] && !any[k];
+    }
+    through = nt * 0.05;
+    unknown = static_cast<double>(nu) / bins;
+  };
   // Split along the wall at gaps wider than wall_gap.
   std::vector<std::pair<double, int>> along;
   for (int i : inliers) along.push_back({(Eigen::Vector2d(points[i].x(), points[i].y()) - point).dot(direction), i});
@@ -280,6 +325,13 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
   std::size_t start = 0;
   for (std::size_t k = 1; k <= along.size(); ++k) {
     if (k < along.size() && along[k].first - along[k - 1].first <= p.wall_gap) continue;
+    // A gap the sensor could not see the wall across (hidden by what stands
+    // in front, and seen through no wider than a doorway) does not split it.
+    if (k < along.size()) {
+      double through, unknown;
+      gapSeen(along[k - 1].first, along[k].first, through, unknown);
+      if (unknown <= kGapUnknown && through <= p.door_max_width + 0.1) continue;
+    }
     WallPlane w;
     w.point = point;
     w.direction = direction;
@@ -440,7 +492,7 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
     }
     const Eigen::Vector2d dir(best_n.y(), -best_n.x());
     if ((viewpoint - best_pt).dot(best_n) < 0) best_n = -best_n;
-    addWallSegments(points, inl, best_pt, dir, best_n, floor_z, height_top, ceiling_known, p, walls, view);
+    addWallSegments(points, inl, best_pt, dir, best_n, floor_z, height_top, ceiling_known, p, walls, view, &viewpoint);
   }
   return walls;
 }

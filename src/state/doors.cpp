@@ -129,20 +129,20 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
   // The doorways of each wall, then the leaf in each doorway: independent
   // searches, run over both cores; decisions follow in wall and doorway order.
   std::vector<std::vector<recognition::Doorway>> doorways(walls.size());
+  // A camera frame's view ends on every side: what a doorway and a leaf
+  // show is judged against the part of them inside the view
+  // (the caller's, when it has one already).
+  const segmentation::ViewTop own =
+      organized && !view_in ? segmentation::viewTop(pts, viewpoint) : segmentation::ViewTop{};
+  const segmentation::ViewTop* view = !organized ? nullptr : view_in ? view_in : &own;
   parallelFor(walls.size(), [&](std::size_t wi) {
-    doorways[wi] = recognition::findDoorways(pts, walls[wi], floor_z, top_z, viewpoint, p, organized);
+    doorways[wi] = recognition::findDoorways(pts, walls[wi], floor_z, top_z, viewpoint, p, organized, view);
   });
   struct Candidate {
     std::size_t wall;
     recognition::Doorway doorway;
     LeafFit leaf;
   };
-  // A camera frame's view ends on every side: what a leaf shows is judged
-  // against the part of it inside the view.
-  // (the caller's, when it has one already).
-  const segmentation::ViewTop own =
-      organized && !view_in ? segmentation::viewTop(pts, viewpoint) : segmentation::ViewTop{};
-  const segmentation::ViewTop* view = !organized ? nullptr : view_in ? view_in : &own;
   std::vector<Candidate> candidates;
   for (std::size_t wi = 0; wi < walls.size(); ++wi)
     for (const recognition::Doorway& d : doorways[wi]) candidates.push_back({wi, d, {}});

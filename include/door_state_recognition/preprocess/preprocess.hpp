@@ -33,6 +33,14 @@ Points voxelDownsample(const Points& points, double leaf);
 Points sanitizeAndDownsample(const pcl::PointCloud<pcl::PointXYZ>& cloud, double max_abs, double leaf,
                              std::size_t* kept = nullptr);
 
+// An organized frame from a pinhole camera at `viewpoint`: the camera is
+// fitted to the pixels with a return (direct linear transform, pixel column
+// and row against the point), and the unit directions of the rays of the
+// pixels without one (every `step`-th row and column) are returned, in the
+// cloud's frame. Empty when the cloud is not organized or no pinhole camera
+// fits its pixels to within a pixel (an organized scan of another kind).
+Points noReturnRays(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vector3f& viewpoint, int step = 2);
+
 // Estimates the up direction of an unlevelled cloud seen from the origin:
 // the direction most normals are parallel (floor, ceiling) or perpendicular
 // (walls) to, signed so that furniture rests on the floor side. `normals`

@@ -65,10 +65,12 @@ struct Doorway {
 // wider than any door gives one from its end nearer the sensor (shadow_end).
 // no_return_is_free: the cloud is an organized camera frame, where a body
 // cell of a doorway without any return means nothing was there in range
-// (counted as seen through).
+// (counted as seen through). With the frame's view (view), such a cell
+// inside the view also joins a doorway's run of open columns: the camera
+// looked there and nothing was in range.
 std::vector<Doorway> findDoorways(const Points& points, const segmentation::WallPlane& wall, double floor_z,
                                   double top_z, const Eigen::Vector3f& viewpoint, const Parameters& p,
-                                  bool no_return_is_free = false);
+                                  bool no_return_is_free = false, const segmentation::ViewTop* view = nullptr);
 
 }  // namespace recognition
 }  // namespace dsr

@@ -63,6 +63,9 @@ struct WallPlane {
 struct ViewTop {
   Eigen::Vector3f viewpoint = Eigen::Vector3f::Zero();
   std::vector<float> max_tan, min_tan;  // per bearing bin (+-inf where nothing); empty: not known
+  // Unit directions (from viewpoint) of a camera's pixels without a return:
+  // nothing was in range along them (preprocess::noReturnRays); may be empty.
+  std::vector<Eigen::Vector3f> no_return;
   int bin(const Eigen::Vector3f& q) const;
   float tanElevation(const Eigen::Vector3f& q) const;
   // Within what the sensor saw: a bearing with returns, between the lowest
@@ -81,14 +84,17 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
                                  const ViewTop* view = nullptr);
 
 // The wall rules of findWalls for one plane's inliers: split along the wall
-// at gaps wider than wall_gap, and append to `walls` each segment that spans
+// at gaps wider than wall_gap (unless, seen from `viewpoint`, the gap shows
+// no wall only because something in front hides it, and is seen through over
+// no more than a doorway's width: points behind the plane, or the rays of
+// `view`'s pixels without a return), and append to `walls` each segment that spans
 // wall_height_ratio of the room, reaches near a known ceiling, is long
 // enough and is not shadowed by a parallel wall found before. `direction`
 // and `normal` (unit, horizontal) give the segment's frame.
 void addWallSegments(const Points& points, const std::vector<int>& inliers, const Eigen::Vector2d& point,
                      const Eigen::Vector2d& direction, const Eigen::Vector2d& normal, double floor_z, double height_top,
                      bool ceiling_known, const Parameters& p, std::vector<WallPlane>& walls,
-                     const ViewTop* view = nullptr);
+                     const ViewTop* view = nullptr, const Eigen::Vector2d* viewpoint = nullptr);
 
 // Region growing (paper 3.1, [22]) over the points where mask != 0: a region
 // grows to neighbours whose normals differ by less than region_angle_deg and
