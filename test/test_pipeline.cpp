@@ -266,6 +266,19 @@ const eval::DoorMatch* matchOf(const Scored& s, int door) {
   return nullptr;
 }
 
+// Truth door `door` found with its state right, and no door reported that
+// matches no truth: the match, or null (a failure added) when it was missed.
+const eval::DoorMatch* expectFoundAlone(const Scored& s, int door) {
+  EXPECT_EQ(s.eval.reported_doors, s.eval.matched) << "a door reported that matches no truth";
+  const eval::DoorMatch* m = matchOf(s, door);
+  if (!m) {
+    ADD_FAILURE() << "door " << door << " missed";
+    return nullptr;
+  }
+  EXPECT_TRUE(m->state_correct) << "door " << door << "'s state";
+  return m;
+}
+
 TEST(DoorState, AnglesOfSingleDoorsBothSidesBothHinges) {
   // Leaves the scanner can see: towards it at any angle, away from it up to
   // the angle where the jamb starts to hide the leaf.
@@ -346,13 +359,8 @@ TEST(DoorState, ALeafSwungTowardsTheSensorIsTakenOnTheFaceItShowsAndFromAShadowW
     SCOPED_TRACE(::testing::Message() << "seed=" << seed << " " << describe(s) << trace(s));
     ASSERT_GT(static_cast<int>(s.truth["doors"].size()), door);
     EXPECT_EQ(s.truth["doors"][door]["swing"], "toward_viewer");
-    EXPECT_EQ(s.eval.reported_doors, s.eval.matched);  // nothing extra
-    const eval::DoorMatch* m = matchOf(s, door);
-    if (!m) {
-      ADD_FAILURE() << "door " << door << " missed";
-      continue;
-    }
-    EXPECT_TRUE(m->state_correct);
+    const eval::DoorMatch* m = expectFoundAlone(s, door);
+    if (!m) continue;
     EXPECT_LT(m->angle_error_deg, 3.0);
   }
 }
@@ -369,10 +377,8 @@ TEST(DoorState, AClosedLeafJustBehindTheFaceDoesNotLowerItsDoorsHead) {
   SCOPED_TRACE(::testing::Message() << "seed=" << seed << " " << describe(s) << trace(s));
   ASSERT_GE(s.truth["doors"].size(), 1u);
   ASSERT_EQ(s.truth["doors"][0]["state"], "closed");
-  EXPECT_EQ(s.eval.reported_doors, s.eval.matched);
-  const eval::DoorMatch* m = matchOf(s, 0);
-  ASSERT_NE(m, nullptr);
-  EXPECT_TRUE(m->state_correct);
+  const eval::DoorMatch* m = expectFoundAlone(s, 0);
+  if (!m) return;
   double height = 0;
   for (const auto& d : s.result.doors)
     if (d.state == DoorStateKind::Closed) height = std::max(height, d.height);
@@ -389,10 +395,8 @@ TEST(DoorState, AStrayTrimLegOnAFlushLeafDoesNotNarrowItsDoorway) {
   const Scored s = runScene(sim::randomRoom(seed), seed, "tls");
   SCOPED_TRACE(::testing::Message() << "seed=" << seed << " " << describe(s) << trace(s));
   ASSERT_EQ(s.truth["doors"][0]["state"], "closed");
-  EXPECT_EQ(s.eval.reported_doors, s.eval.matched);
-  const eval::DoorMatch* m = matchOf(s, 0);
-  ASSERT_NE(m, nullptr);
-  EXPECT_TRUE(m->state_correct);
+  const eval::DoorMatch* m = expectFoundAlone(s, 0);
+  if (!m) return;
   const DoorResult& d = s.result.doors.at(static_cast<std::size_t>(m->report_index));
   EXPECT_NEAR(d.width, s.truth["doors"][0]["width"].get<double>(), 0.08);
 }
@@ -407,10 +411,8 @@ TEST(DoorState, ALeafSwungTowardsTheSensorIsSoughtDeeperThanAThinMeasuredWall) {
   const Scored s = runScene(sim::randomRoom(seed), seed, "tls");
   SCOPED_TRACE(::testing::Message() << "seed=" << seed << " " << describe(s) << trace(s));
   ASSERT_GT(s.truth["doors"][0]["recess"].get<double>(), 0.1);
-  EXPECT_EQ(s.eval.reported_doors, s.eval.matched);
-  const eval::DoorMatch* m = matchOf(s, 0);
-  ASSERT_NE(m, nullptr);
-  EXPECT_TRUE(m->state_correct);
+  const eval::DoorMatch* m = expectFoundAlone(s, 0);
+  if (!m) return;
   EXPECT_LT(m->angle_error_deg, 3.0);
   EXPECT_LT(m->hinge_error_m, 0.1);
 }
@@ -425,10 +427,7 @@ TEST(DoorState, AClosedLeafTooSparseForTheWallBandStillHasItsClosedEvidence) {
   const Scored s = runScene(sim::randomRoom(seed), seed, "tls", 100000);
   SCOPED_TRACE(::testing::Message() << "seed=" << seed << " (100k rays) " << describe(s) << trace(s));
   ASSERT_EQ(s.truth["doors"][0]["state"], "closed");
-  EXPECT_EQ(s.eval.reported_doors, s.eval.matched);
-  const eval::DoorMatch* m = matchOf(s, 0);
-  ASSERT_NE(m, nullptr);
-  EXPECT_TRUE(m->state_correct);
+  expectFoundAlone(s, 0);
 }
 
 TEST(DoorState, ASparseScanFindsTheHeadTrimOfAClosedDoor) {
@@ -445,13 +444,7 @@ TEST(DoorState, ASparseScanFindsTheHeadTrimOfAClosedDoor) {
     SCOPED_TRACE(::testing::Message() << "seed=" << seed << " (100k rays) " << describe(s) << trace(s));
     ASSERT_GT(static_cast<int>(s.truth["doors"].size()), door);
     ASSERT_EQ(s.truth["doors"][door]["state"], "closed");
-    EXPECT_EQ(s.eval.reported_doors, s.eval.matched);  // nothing extra
-    const eval::DoorMatch* m = matchOf(s, door);
-    if (!m) {
-      ADD_FAILURE() << "door " << door << " missed";
-      continue;
-    }
-    EXPECT_TRUE(m->state_correct);
+    expectFoundAlone(s, door);
   }
 }
 
@@ -464,10 +457,7 @@ TEST(DoorState, AHeadTrimStraddlingTwoGridRowsIsFound) {
   const Scored s = runScene(sim::randomRoom(seed), seed, "tls", 1000000);
   SCOPED_TRACE(::testing::Message() << "seed=" << seed << " (1M rays) " << describe(s) << trace(s));
   ASSERT_EQ(s.truth["doors"][0]["state"], "closed");
-  EXPECT_EQ(s.eval.reported_doors, s.eval.matched);
-  const eval::DoorMatch* m = matchOf(s, 0);
-  ASSERT_NE(m, nullptr);
-  EXPECT_TRUE(m->state_correct);
+  expectFoundAlone(s, 0);
 }
 
 TEST(DoorState, ALeafHidingTheTrimAtItsHingeIsFittedAsInAnUnpairedDoorway) {
@@ -480,10 +470,8 @@ TEST(DoorState, ALeafHidingTheTrimAtItsHingeIsFittedAsInAnUnpairedDoorway) {
   const Scored s = runScene(sim::randomRoom(seed), seed, "tls");
   SCOPED_TRACE(::testing::Message() << "seed=" << seed << " " << describe(s) << trace(s));
   ASSERT_EQ(s.truth["doors"][0]["swing"], "toward_viewer");
-  EXPECT_EQ(s.eval.reported_doors, s.eval.matched);
-  const eval::DoorMatch* m = matchOf(s, 0);
-  ASSERT_NE(m, nullptr);
-  EXPECT_TRUE(m->state_correct);
+  const eval::DoorMatch* m = expectFoundAlone(s, 0);
+  if (!m) return;
   EXPECT_LT(m->angle_error_deg, 3.0);
 }
 
