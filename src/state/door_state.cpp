@@ -281,14 +281,16 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       P[ai] = H + K[ai] * (lt / 2);  // the leaf's mid-plane
     }
   };
-  // f(i) for every angle start + i step of w within [lo, hi] degrees, modulo 360.
-  auto forArc = [&](const HingeRun& w, double lo, double hi, auto&& f) {
+  // f(i) for every angle start + i step of w within [lo, hi] degrees, modulo
+  // 360, and with i in [first, last] (f is not called outside it).
+  auto forArc = [&](const HingeRun& w, double lo, double hi, auto&& f, int first = 0, int last = -1) {
+    if (last < 0) last = w.count - 1;
     const double end = w.start + (w.count - 1) * w.step;
     for (double shift = -360; shift <= 360; shift += 360) {
       const double a = lo + shift, b = hi + shift;
       if (b < w.start - w.step || a > end + w.step) continue;  // no angle of the run
-      const int i0 = std::max(0, static_cast<int>(std::ceil((a - w.start) / w.step - 1e-9)));
-      const int i1 = std::min(w.count - 1, static_cast<int>(std::floor((b - w.start) / w.step + 1e-9)));
+      const int i0 = std::max(first, static_cast<int>(std::ceil((a - w.start) / w.step - 1e-9)));
+      const int i1 = std::min(last, static_cast<int>(std::floor((b - w.start) / w.step + 1e-9)));
       for (int i = i0; i <= i1; ++i) f(i);
     }
   };
@@ -331,6 +333,13 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   auto scoreRays = [&](HingeRun& w, const std::vector<char>* need) {
     std::vector<char> blocked(w.count * cells, 0);  // per angle: leaf bin x z bin
     w.con.assign(static_cast<std::size_t>(w.count) * na_max, 0);
+    // The angles needed lie in [first, last]: a test outside would return at once.
+    int first = 0, last = w.count - 1;
+    if (need) {
+      while (first <= last && !(*need)[first]) ++first;
+      while (last >= first && !(*need)[last]) --last;
+      if (first > last) return;
+    }
     std::vector<Eigen::Vector2d> E, K, P;
     axes(w, E, K, P);
     const Eigen::Vector2d H(w.s_h, w.d_h);
@@ -364,7 +373,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       const double tc = std::clamp(-bq / uu, t0, t1);
       const double rho_min = (w0 + tc * u).norm();
       if (rho_min <= std::max(0.05, lt / 2)) {
-        for (int ai = 0; ai < w.count; ++ai) test(ai);
+        for (int ai = first; ai <= last; ++ai) test(ai);
         continue;
       }
       const double c0 = fastAtan2Deg(w.m * (w0 + t0 * u).y(), w.e0 * (w0 + t0 * u).x());
@@ -376,7 +385,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       // The leaf's mid-line passes a point X of the chord (bearing c, distance
       // rho) at th = c + asin(lt / 2 / rho): the arc widens on one side only.
       const double dl = asinAbove(std::min(1.0, lt / 2 / rho_min)) * 180 / M_PI + kBearingSlackDeg;
-      forArc(w, lo - kBearingSlackDeg, hi + dl, test);
+      forArc(w, lo - kBearingSlackDeg, hi + dl, test, first, last);
     }
   };
   auto finishScores = [&](HingeRun& w, const std::vector<char>* need) {
