@@ -387,7 +387,7 @@ std::size_t countInliers(const float* x, const float* y, const float* nxs, const
 
 std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, double floor_z, double height_top,
                                  bool ceiling_known, const Eigen::Vector2d& viewpoint, const Parameters& p,
-                                 const ViewTop* view) {
+                                 const ViewTop* view, const OnWall& on_wall) {
   std::vector<int> pool;
   for (std::size_t i = 0; i < points.size(); ++i)
     if (std::abs(normals.n[i].z()) < p.vertical_normal_z && points[i].z() > floor_z + 0.05) pool.push_back(static_cast<int>(i));
@@ -496,7 +496,10 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
       task_inl.swap(inl);
 #pragma omp task default(shared) firstprivate(best_pt, best_n, dir)
       try {
+        const std::size_t before = walls.size();
         addWallSegments(points, task_inl, best_pt, dir, best_n, floor_z, height_top, ceiling_known, p, walls, view);
+        if (on_wall)
+          for (std::size_t i = before; i < walls.size(); ++i) on_wall(i, walls[i]);
       } catch (...) {
         error = std::current_exception();
       }
