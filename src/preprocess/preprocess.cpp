@@ -74,7 +74,7 @@ bool downsampleDense(long long n, const PointAt& point, const std::vector<std::u
     ++valid;
   }
   if (valid == 0) return false;
-  auto brickOf = [](int v) { return v >= 0 ? v / 4 : -((-v + 3) / 4); };  // floor(v / 4)
+  auto brickOf = [](int v) { return v >> 2; };  // floor(v / 4): an arithmetic shift (as g++ shifts, and C++20 requires)
   const Eigen::Vector3i blo(brickOf(lo.x()), brickOf(lo.y()), brickOf(lo.z()));
   const Eigen::Vector3i dims = Eigen::Vector3i(brickOf(hi.x()), brickOf(hi.y()), brickOf(hi.z())) - blo + Eigen::Vector3i::Ones();
   const double volume = static_cast<double>(dims.x()) * dims.y() * dims.z();
