@@ -351,6 +351,10 @@ namespace {
 
 // RANSAC never stops before this many draws.
 constexpr int kMinRansacIterations = 20;
+// Below these (sample points scored, a plane's inliers) the work of a RANSAC
+// round is too small to hand to the other thread: waiting for it could cost
+// more (a thread of a loaded machine waits for its turn on a core).
+constexpr std::size_t kTaskSample = 4000, kTaskInliers = 1000;
 
 // Of the n sample points (x, y, normal nx_i, ny_i), those within wd of the
 // line through (qx, qy) with normal (nx, ny) whose normal agrees (|n . n_i|
@@ -440,12 +444,13 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
       };
       // The first kMinRansacIterations draws are scored whatever they score
       // (needed never falls below): drawn in turn as the loop draws them, and
-      // scored as tasks, two at once.
+      // scored as tasks, two at once (a small sample here: no tasks, no wait
+      // on the other thread).
       const int always = std::min(kMinRansacIterations, p.ransac_iterations);
       std::vector<int> drawn(always);
       std::vector<std::size_t> counts(always, 0);
       for (int it = 0; it < always; ++it) drawn[it] = pool[pick(rng)];
-#pragma omp taskloop default(shared) num_tasks(2)
+#pragma omp taskloop default(shared) num_tasks(2) if (ns >= kTaskSample)
       for (int it = 0; it < always; ++it) counts[it] = score(drawn[it]);
       for (int it = 0; it < std::min(needed, p.ransac_iterations); ++it) {
         const int s = it < always ? drawn[it] : pool[pick(rng)];
@@ -494,7 +499,7 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
 #pragma omp taskwait
       if (error || static_cast<int>(walls.size()) >= p.max_walls) break;
       task_inl.swap(inl);
-#pragma omp task default(shared) firstprivate(best_pt, best_n, dir)
+#pragma omp task default(shared) firstprivate(best_pt, best_n, dir) if (task_inl.size() >= kTaskInliers)
       try {
         const std::size_t before = walls.size();
         addWallSegments(points, task_inl, best_pt, dir, best_n, floor_z, height_top, ceiling_known, p, walls, view);
