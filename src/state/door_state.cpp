@@ -1,4 +1,5 @@
 #include "door_state_recognition/state/door_state.hpp"
+#include "door_state_recognition/util/floor.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -289,8 +290,8 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     for (double shift = -360; shift <= 360; shift += 360) {
       const double a = lo + shift, b = hi + shift;
       if (b < w.start - w.step || a > end + w.step) continue;  // no angle of the run
-      const int i0 = std::max(first, static_cast<int>(std::ceil((a - w.start) / w.step - 1e-9)));
-      const int i1 = std::min(last, static_cast<int>(std::floor((b - w.start) / w.step + 1e-9)));
+      const int i0 = std::max(first, util::ceilToInt((a - w.start) / w.step - 1e-9));
+      const int i1 = std::min(last, util::floorToInt((b - w.start) / w.step + 1e-9));
       for (int i = i0; i <= i1; ++i) f(i);
     }
   };

@@ -7,24 +7,16 @@
 #include <Eigen/Core>
 #include <cmath>
 #include <cstdint>
-#include <limits>
 #include <vector>
+
+#include "door_state_recognition/util/floor.hpp"
 
 namespace dsr {
 namespace preprocess {
 
-// static_cast<int>(std::floor(v)) wherever that is defined (floor(v) an
-// int): truncated, one less where truncation rounded up (v negative, not
-// whole). A few instructions where std::floor without SSE4.1 takes twenty.
-// Out of range both give what x86 converts it to, INT_MIN.
-inline int floorToInt(double v) {
-  const int t = static_cast<int>(v);
-  return t - static_cast<int>(v < static_cast<double>(t) && t != std::numeric_limits<int>::min());
-}
-
 // Integer cell coordinates of a point for cells of edge 1/inv.
 inline Eigen::Vector3i cellOf(const Eigen::Vector3f& p, double inv) {
-  return Eigen::Vector3i(floorToInt(p.x() * inv), floorToInt(p.y() * inv), floorToInt(p.z() * inv));
+  return Eigen::Vector3i(util::floorToInt(p.x() * inv), util::floorToInt(p.y() * inv), util::floorToInt(p.z() * inv));
 }
 
 // 21 bits an axis. Coordinates beyond +-2^20 cells wrap: two far-apart cells
