@@ -201,12 +201,16 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
 
   // Rays from the sensor that pass near the doorway: a leaf cannot stand
   // where a ray went through to something farther away (free space).
+  // Every ray starts at the sensor, (s, d) = vsd at height vsz: a ray holds
+  // only its end (the searches read every ray at every hinge; a compact ray
+  // spares the memory traffic).
   struct Ray {
-    Eigen::Vector2d v, q;  // (s, d) of sensor and point
-    double vz, qz, len;
+    Eigen::Vector2d q;  // (s, d) of the point
+    double qz, len;
   };
   std::vector<Ray> rays;
   const Eigen::Vector2d vsd(wall.along(viewpoint), wall.signedDistance(viewpoint));
+  const double vsz = viewpoint.z();
   const Eigen::Vector2d dc(s_mid, -t / 2);
   // A return whose ray from the sensor passes near the doorway: its (s, d)
   // and the ray's squared length in the wall's plan.
@@ -221,7 +225,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   for (const auto& q : points) {
     Eigen::Vector2d qsd;
     double len2;
-    if (nearDoorway(q, qsd, len2)) rays.push_back({vsd, qsd, viewpoint.z(), q.z(), std::sqrt(len2)});
+    if (nearDoorway(q, qsd, len2)) rays.push_back({qsd, q.z(), std::sqrt(len2)});
   }
   // Enough rays to see free space at 5 cm x 10 cm cells; more only cost time.
   if (rays.size() > 15000) {
@@ -346,7 +350,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     const Eigen::Vector2d H(w.s_h, w.d_h);
     for (const Ray& ray : rays) {
       // The part of the ray that counts: from the sensor to 6 cm before its point.
-      const Eigen::Vector2d A = ray.v, B = ray.q - (0.06 / ray.len) * (ray.q - ray.v);
+      const Eigen::Vector2d A = vsd, B = ray.q - (0.06 / ray.len) * (ray.q - vsd);
       const Eigen::Vector2d u = B - A, w0 = A - H;
       const double uu = u.squaredNorm();
       if (uu < 1e-12) continue;
@@ -358,14 +362,14 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       if (t0 >= t1) continue;
       // Every crossing with a leaf lies on that chord: a ray passing above or
       // below the leaf's heights there crosses none (1 mm spares rounding).
-      const double lam_max = 1 - 0.06 / ray.len, dz = ray.qz - ray.vz;
-      const double za = ray.vz + t0 * lam_max * dz, zb = ray.vz + t1 * lam_max * dz;
+      const double lam_max = 1 - 0.06 / ray.len, dz = ray.qz - vsz;
+      const double za = vsz + t0 * lam_max * dz, zb = vsz + t1 * lam_max * dz;
       if (std::max(za, zb) < z0 - 1e-3 || std::min(za, zb) >= z1 + 1e-3) continue;
-      const Eigen::Vector2d r = ray.q - ray.v;
+      const Eigen::Vector2d r = ray.q - vsd;
       auto test = [&](int ai) {
         if (need && !(*need)[ai]) return;
         double a, z;
-        if (!crossLeaf(ray.v, r, ray.vz, dz, lam_max, P[ai], E[ai], a, z) || a < 0.05 || a >= Lmax || z < z0 || z >= z1)
+        if (!crossLeaf(vsd, r, vsz, dz, lam_max, P[ai], E[ai], a, z) || a < 0.05 || a >= Lmax || z < z0 || z >= z1)
           return;
         const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
         char& f = blocked[ai * cells + static_cast<std::size_t>(ab) * nz + std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
@@ -477,16 +481,16 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       for (int i = 0; i < ns; ++i) any |= (*need)[i][ai] != 0;
       if (!any) return;
       for (const Ray& ray : rays) {
-        const Eigen::Vector2d r = ray.q - ray.v;
+        const Eigen::Vector2d r = ray.q - vsd;
         const double denom = r.x() * Ea.y() - r.y() * Ea.x();
         if (std::abs(denom) < 1e-9) continue;  // crossLeaf: parallel, crosses at no hinge
-        const double lam_max = 1 - 0.06 / ray.len, dz = ray.qz - ray.vz;
+        const double lam_max = 1 - 0.06 / ray.len, dz = ray.qz - vsz;
         // w = P - v: w.y the same at every hinge, w.x = s_h + (K.x lt / 2 - v.x) =: s_h + off.
-        const double wy = P[0][ai].y() - ray.v.y(), off = Ka.x() * (lt / 2) - ray.v.x();
+        const double wy = P[0][ai].y() - vsd.y(), off = Ka.x() * (lt / 2) - vsd.x();
         // lam = (w.x E.y - w.y E.x) / denom in (0, lam_max], and z = vz + lam dz in [z0, z1).
         double llo = 0, lhi = lam_max;
         if (std::abs(dz) >= kTiny) {
-          double za = (z0 - ray.vz) / dz, zb = (z1 - ray.vz) / dz;
+          double za = (z0 - vsz) / dz, zb = (z1 - vsz) / dz;
           if (za > zb) std::swap(za, zb);
           llo = std::max(llo, za), lhi = std::min(lhi, zb);
         }
@@ -503,7 +507,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
         for (int i = i0; i <= i1; ++i) {
           if (!(*need)[i][ai]) continue;
           double a, z;
-          if (!crossLeaf(ray.v, r, ray.vz, dz, lam_max, P[i][ai], E[i][ai], a, z) || a < 0.05 || a >= Lmax || z < z0 ||
+          if (!crossLeaf(vsd, r, vsz, dz, lam_max, P[i][ai], E[i][ai], a, z) || a < 0.05 || a >= Lmax || z < z0 ||
               z >= z1)
             continue;
           const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
@@ -838,7 +842,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
             for (std::size_t ri = 0; ri < rays.size() && n <= most; ++ri) {
               const Ray& ray = rays[ri];
               double a, z;
-              if (!crossLeaf(ray.v, ray.q - ray.v, ray.vz, ray.qz - ray.vz, 1 - 0.06 / ray.len, P, e, a, z) || a < 0.05 ||
+              if (!crossLeaf(vsd, ray.q - vsd, vsz, ray.qz - vsz, 1 - 0.06 / ray.len, P, e, a, z) || a < 0.05 ||
                   a >= L || z < z0 || z >= z1)
                 continue;
               char& f = crossed[static_cast<std::size_t>(std::min(nl - 1, static_cast<int>(a / abin))) * nz +
