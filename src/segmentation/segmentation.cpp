@@ -42,14 +42,24 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
   // Moments of every cell, once: count, sum and sum of outer products, about
   // one origin in the cloud (in double, exact enough for centimetre spreads
   // up to max_abs_coordinate away), so that cells' moments simply add.
+  // The sum of outer products is kept as its upper triangle (xx xy xz yy yz
+  // zz): the lower one mirrors it exactly (d_i d_j = d_j d_i, and sums of
+  // equal terms in the same order are equal), and 80 bytes a cell read 27
+  // times over where 104 were.
   struct Moments {
     double n = 0;
-    Eigen::Vector3d s = Eigen::Vector3d::Zero();
-    Eigen::Matrix3d ss = Eigen::Matrix3d::Zero();
+    double s[3] = {0, 0, 0};
+    double q[6] = {0, 0, 0, 0, 0, 0};
     void add(const Moments& b) {
       n += b.n;
-      s += b.s;
-      ss += b.ss;
+      for (int k = 0; k < 3; ++k) s[k] += b.s[k];
+      for (int k = 0; k < 6; ++k) q[k] += b.q[k];
+    }
+    void addPoint(const Eigen::Vector3d& d) {
+      n += 1;
+      for (int k = 0; k < 3; ++k) s[k] += d[k];
+      q[0] += d.x() * d.x(), q[1] += d.x() * d.y(), q[2] += d.x() * d.z();
+      q[3] += d.y() * d.y(), q[4] += d.y() * d.z(), q[5] += d.z() * d.z();
     }
   };
   const std::size_t cells = grid.cells();
@@ -58,10 +68,7 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
 #pragma omp parallel for schedule(static, 1024)
   for (long long c = 0; c < static_cast<long long>(cells); ++c) {
     for (const int* it = grid.cellBegin(c); it != grid.cellEnd(c); ++it) {
-      const Eigen::Vector3d d = grid.point(*it).cast<double>() - origin;
-      m[c].n += 1;
-      m[c].s += d;
-      m[c].ss += d * d.transpose();
+      m[c].addPoint(grid.point(*it).cast<double>() - origin);
     }
   }
   // A coarse level (cells twice as wide) for sparse surroundings: 27 coarse
@@ -114,8 +121,10 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
   auto pca = [](const Moments& acc) {
     Pca r;
     if (acc.n < 3) return r;  // isolated: no normal (zero), curvature 1
-    const Eigen::Vector3d mean = acc.s / acc.n;
-    const Eigen::Matrix3d C = acc.ss / acc.n - mean * mean.transpose();
+    const Eigen::Vector3d mean = Eigen::Vector3d(acc.s[0], acc.s[1], acc.s[2]) / acc.n;
+    Eigen::Matrix3d ss;
+    ss << acc.q[0], acc.q[1], acc.q[2], acc.q[1], acc.q[3], acc.q[4], acc.q[2], acc.q[4], acc.q[5];
+    const Eigen::Matrix3d C = ss / acc.n - mean * mean.transpose();
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
     es.computeDirect(C);
     r.n = es.eigenvectors().col(0).cast<float>().normalized();
