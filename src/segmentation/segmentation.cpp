@@ -264,12 +264,27 @@ ViewTop viewTop(const Points& points, const Eigen::Vector3f& viewpoint) {
   v.viewpoint = viewpoint;
   v.max_tan.assign(kViewTopBins, -std::numeric_limits<float>::infinity());
   v.min_tan.assign(kViewTopBins, std::numeric_limits<float>::infinity());
-  for (const auto& q : points) {
-    const int b = v.bin(q);
-    if (b < 0) continue;
-    const float t = v.tanElevation(q);
-    v.max_tan[b] = std::max(v.max_tan[b], t);
-    v.min_tan[b] = std::min(v.min_tan[b], t);
+  // Over the cores, each into bins of its own, then merged: a least or
+  // greatest value is the same whatever the order it is taken in.
+  const long long n = static_cast<long long>(points.size());
+#pragma omp parallel if (n >= 20000)
+  {
+    std::vector<float> hi(kViewTopBins, -std::numeric_limits<float>::infinity());
+    std::vector<float> lo(kViewTopBins, std::numeric_limits<float>::infinity());
+#pragma omp for schedule(static) nowait
+    for (long long i = 0; i < n; ++i) {
+      const auto& q = points[i];
+      const int b = v.bin(q);
+      if (b < 0) continue;
+      const float t = v.tanElevation(q);
+      hi[b] = std::max(hi[b], t);
+      lo[b] = std::min(lo[b], t);
+    }
+#pragma omp critical(dsr_view_top)
+    for (int b = 0; b < kViewTopBins; ++b) {
+      v.max_tan[b] = std::max(v.max_tan[b], hi[b]);
+      v.min_tan[b] = std::min(v.min_tan[b], lo[b]);
+    }
   }
   return v;
 }
