@@ -6,7 +6,6 @@
 #include <cmath>
 #include <exception>
 #include <limits>
-#include <set>
 
 namespace dsr {
 namespace state {
@@ -168,36 +167,26 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     return withinReach(s - door.s0, d + t / 2) || withinReach(s - door.s1, d + t / 2);
   };
 
+  // The points near the doorway (and those in the wall band inside it), and
+  // the rays passing near it: two passes over every point, independent, so
+  // run at once when both are needed (one is not when the band's points
+  // alone can end the search, below).
   std::vector<Local> pts, band;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const auto& q = points[i];
-    if (q.z() < z0 || q.z() >= z1) continue;
-    const double s = wall.along(q), d = wall.signedDistance(q);
-    if (!nearJamb(s, d)) continue;
-    const int zb = std::min(nz - 1, static_cast<int>((q.z() - z0) / zbin));
-    const bool inside = s > door.s0 + 0.03 && s < door.s1 - 0.03;
-    const bool in_wall_band = d > -t - 0.03 && d < p.face_tolerance + 0.01;
-    // A closed leaf may sit deeper than the estimated thickness (jambs unseen).
-    if (inside && d > -std::max(t, 0.3) - 0.03 && d < p.face_tolerance + 0.01) band.push_back({s, d, zb, static_cast<int>(i)});
-    if (in_wall_band && !inside) continue;  // wall, trim and jambs beside the doorway
-    pts.push_back({s, d, zb, static_cast<int>(i)});
-  }
-
-  // A closed leaf anywhere inside the wall's thickness (flush or recessed).
-  const double expected = static_cast<double>(std::max(1, static_cast<int>(std::ceil(L / abin)))) * nz;
-  std::set<std::pair<int, int>> band_cells;
-  std::vector<Eigen::Vector2d> band_xy;
-  for (const Local& q : band) {
-    band_cells.insert({static_cast<int>((q.s - door.s0) / abin), q.zbin});
-    band_xy.emplace_back(q.s, q.d);
-  }
-  const double band_cov = std::min(1.0, band_cells.size() / expected);
-  fit.candidate_points = static_cast<int>(pts.size());
-  if (closed_band_only_above > 0 && band_cov <= closed_band_only_above) {
-    fit.searched = false;
-    fit.best_coverage = band_cov;
-    return fit;
-  }
+  auto gatherPoints = [&] {
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const auto& q = points[i];
+      if (q.z() < z0 || q.z() >= z1) continue;
+      const double s = wall.along(q), d = wall.signedDistance(q);
+      if (!nearJamb(s, d)) continue;
+      const int zb = std::min(nz - 1, static_cast<int>((q.z() - z0) / zbin));
+      const bool inside = s > door.s0 + 0.03 && s < door.s1 - 0.03;
+      const bool in_wall_band = d > -t - 0.03 && d < p.face_tolerance + 0.01;
+      // A closed leaf may sit deeper than the estimated thickness (jambs unseen).
+      if (inside && d > -std::max(t, 0.3) - 0.03 && d < p.face_tolerance + 0.01) band.push_back({s, d, zb, static_cast<int>(i)});
+      if (in_wall_band && !inside) continue;  // wall, trim and jambs beside the doorway
+      pts.push_back({s, d, zb, static_cast<int>(i)});
+    }
+  };
 
   // Rays from the sensor that pass near the doorway: a leaf cannot stand
   // where a ray went through to something farther away (free space).
@@ -222,18 +211,46 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     const double lam = std::clamp((dc - vsd).dot(r) / len2, 0.0, 1.0);
     return !((vsd + lam * r - dc).norm() > reach + Lmax);
   };
-  for (const auto& q : points) {
-    Eigen::Vector2d qsd;
-    double len2;
-    if (nearDoorway(q, qsd, len2)) rays.push_back({qsd, q.z(), std::sqrt(len2)});
+  auto gatherRays = [&] {
+    for (const auto& q : points) {
+      Eigen::Vector2d qsd;
+      double len2;
+      if (nearDoorway(q, qsd, len2)) rays.push_back({qsd, q.z(), std::sqrt(len2)});
+    }
+    // Enough rays to see free space at 5 cm x 10 cm cells; more only cost time.
+    if (rays.size() > 15000) {
+      const std::size_t stride = (rays.size() + 14999) / 15000;
+      std::vector<Ray> thin;
+      for (std::size_t i = 0; i < rays.size(); i += stride) thin.push_back(rays[i]);
+      rays.swap(thin);
+    }
+  };
+  const bool rays_needed = closed_band_only_above <= 0;
+  if (rays_needed) {
+    forEachTask(2, [&](std::size_t i) { i == 0 ? gatherPoints() : gatherRays(); });
+  } else {
+    gatherPoints();
   }
-  // Enough rays to see free space at 5 cm x 10 cm cells; more only cost time.
-  if (rays.size() > 15000) {
-    const std::size_t stride = (rays.size() + 14999) / 15000;
-    std::vector<Ray> thin;
-    for (std::size_t i = 0; i < rays.size(); i += stride) thin.push_back(rays[i]);
-    rays.swap(thin);
+
+  // A closed leaf anywhere inside the wall's thickness (flush or recessed).
+  // Its cells holding points: (leaf bin, z bin) pairs, counted once each.
+  const double expected = static_cast<double>(std::max(1, static_cast<int>(std::ceil(L / abin)))) * nz;
+  std::vector<std::pair<int, int>> band_cells;
+  std::vector<Eigen::Vector2d> band_xy;
+  for (const Local& q : band) {
+    band_cells.push_back({static_cast<int>((q.s - door.s0) / abin), q.zbin});
+    band_xy.emplace_back(q.s, q.d);
   }
+  std::sort(band_cells.begin(), band_cells.end());
+  band_cells.erase(std::unique(band_cells.begin(), band_cells.end()), band_cells.end());
+  const double band_cov = std::min(1.0, band_cells.size() / expected);
+  fit.candidate_points = static_cast<int>(pts.size());
+  if (closed_band_only_above > 0 && band_cov <= closed_band_only_above) {
+    fit.searched = false;
+    fit.best_coverage = band_cov;
+    return fit;
+  }
+  if (!rays_needed) gatherRays();
 
   // Exhaustive search over hinge side, swing side and angle: cells of the
   // leaf holding points (support) against cells rays went through (contradiction).
