@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdio>
 #include <exception>
+#include <memory>
 #include <cmath>
 #include <stdexcept>
 
@@ -15,6 +16,35 @@
 #include "door_state_recognition/state/doors.hpp"
 
 namespace dsr {
+
+namespace {
+
+// recognition::findDoorways on one wall as an OpenMP task, into *out; the
+// first exception thrown goes to *error.
+struct DoorwayJob {
+  std::shared_ptr<const segmentation::WallPlane> wall;
+  std::shared_ptr<std::vector<recognition::Doorway>> out;
+  const preprocess::Points* pts;
+  double floor_z, top_z;
+  Eigen::Vector3f viewpoint;
+  const Parameters* p;
+  bool organized;
+  const segmentation::ViewTop* view;  // a camera frame's, or null
+  std::exception_ptr* error;
+};
+void startDoorwayTask(const DoorwayJob& job_in) {
+  const DoorwayJob job = job_in;
+#pragma omp task firstprivate(job)
+  try {
+    *job.out = recognition::findDoorways(*job.pts, *job.wall, job.floor_z, job.top_z, job.viewpoint, *job.p, job.organized,
+                                         job.view);
+  } catch (...) {
+#pragma omp critical(dsr_doorway_task_error)
+    if (!*job.error) *job.error = std::current_exception();
+  }
+}
+
+}  // namespace
 
 const char* toString(DoorStateKind s) {
   switch (s) {
@@ -128,8 +158,25 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
     view.no_return = preprocess::noReturnRays(cloud, viewpoint_in.cast<float>());
     for (auto& d : view.no_return) d = R * d;
   }
+  // Each wall's doorways are sought (as findDoors would) as soon as
+  // findWalls takes the wall, as a task beside its rounds still to come.
+  std::vector<std::shared_ptr<std::vector<recognition::Doorway>>> found;  // per wall, filled by its task
+  std::exception_ptr doorway_error;
+  auto onWall = [&](std::size_t wi, const segmentation::WallPlane& wall) {
+    if (found.size() <= wi) found.resize(wi + 1);
+    found[wi] = std::make_shared<std::vector<recognition::Doorway>>();
+    startDoorwayTask({std::make_shared<const segmentation::WallPlane>(wall), found[wi], &pts, floor_z, top_z, viewpoint,
+                      &p, organized, organized ? &view : nullptr, &doorway_error});
+  };
   const std::vector<segmentation::WallPlane> walls = segmentation::findWalls(
-      pts, normals, floor_z, top_z, fc.ceiling.has_value(), viewpoint.head<2>().cast<double>(), p, &view);
+      pts, normals, floor_z, top_z, fc.ceiling.has_value(), viewpoint.head<2>().cast<double>(), p, &view, onWall);
+  if (doorway_error) std::rethrow_exception(doorway_error);
+  std::vector<std::vector<recognition::Doorway>> doorways(walls.size());
+  for (std::size_t wi = 0; wi < walls.size(); ++wi)
+    doorways[wi] = wi < found.size() && found[wi]
+                       ? std::move(*found[wi])
+                       : recognition::findDoorways(pts, walls[wi], floor_z, top_z, viewpoint, p, organized,
+                                                   organized ? &view : nullptr);
   watch.mark("walls");
   for (std::size_t wi = 0; wi < walls.size(); ++wi) {
     char buf[200];
@@ -143,7 +190,8 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   auto onFloor = [&](const Eigen::Vector2d& xy) { return Eigen::Vector3d(xy.x(), xy.y(), floor_z); };
   const Eigen::Matrix3d Rt = R.cast<double>().transpose();
   auto toInput = [&](const Eigen::Vector3d& v) -> Eigen::Vector3d { return Rt * v; };
-  state::DoorStage door_stage = state::findDoors(pts, walls, floor_z, top_z, fc.ceiling.has_value(), viewpoint, Rt, organized, p, &view);
+  state::DoorStage door_stage =
+      state::findDoors(pts, walls, floor_z, top_z, fc.ceiling.has_value(), viewpoint, Rt, organized, p, &view, &doorways);
   res.doors = std::move(door_stage.doors);
   res.trace.insert(res.trace.end(), door_stage.trace.begin(), door_stage.trace.end());
   const std::vector<char>& is_leaf = door_stage.is_leaf;

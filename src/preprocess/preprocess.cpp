@@ -118,20 +118,32 @@ inline Eigen::Vector3i unpackCell(std::uint64_t k) {
 // entries a point plus 1M), each brick's 64 cells numbered as first met. A
 // scan meets cells brick by brick, so the lookups stay in cache. Cells are
 // numbered and summed exactly as downsample() does. False: box too large.
+// The cells' bounding box (of their keys' coordinates) and whether any key
+// is valid, when the caller found them already.
+struct KeyBox {
+  Eigen::Vector3i lo, hi;
+  bool any;
+};
+
 template <class PointAt>
-bool downsampleDense(long long n, const PointAt& point, const std::vector<std::uint64_t>& key, Points& out) {
+bool downsampleDense(long long n, const PointAt& point, const std::vector<std::uint64_t>& key, Points& out,
+                     const KeyBox* box = nullptr) {
   Eigen::Vector3i lo = Eigen::Vector3i::Constant(std::numeric_limits<int>::max()), hi = -lo;
   long long valid = 0;
   std::uint64_t last_key = kNoKey;
-  for (long long i = 0; i < n; ++i) {
-    if (key[i] == kNoKey || key[i] == last_key) continue;
-    last_key = key[i];
-    const Eigen::Vector3i c = unpackCell(key[i]);
-    lo = lo.cwiseMin(c), hi = hi.cwiseMax(c);
-    ++valid;
+  if (box) {
+    lo = box->lo, hi = box->hi, valid = box->any;
+  } else {
+    for (long long i = 0; i < n; ++i) {
+      if (key[i] == kNoKey || key[i] == last_key) continue;
+      last_key = key[i];
+      const Eigen::Vector3i c = unpackCell(key[i]);
+      lo = lo.cwiseMin(c), hi = hi.cwiseMax(c);
+      ++valid;
+    }
   }
   if (valid == 0) return false;
-  auto brickOf = [](int v) { return v >= 0 ? v / 4 : -((-v + 3) / 4); };  // floor(v / 4)
+  auto brickOf = [](int v) { return v >> 2; };  // floor(v / 4): an arithmetic shift (as g++ shifts, and C++20 requires)
   const Eigen::Vector3i blo(brickOf(lo.x()), brickOf(lo.y()), brickOf(lo.z()));
   const Eigen::Vector3i dims = Eigen::Vector3i(brickOf(hi.x()), brickOf(hi.y()), brickOf(hi.z())) - blo + Eigen::Vector3i::Ones();
   const double volume = static_cast<double>(dims.x()) * dims.y() * dims.z();
@@ -175,10 +187,10 @@ bool downsampleDense(long long n, const PointAt& point, const std::vector<std::u
 }
 
 template <class PointAt>
-Points downsample(long long n, const PointAt& point, const std::vector<std::uint64_t>& key) {
+Points downsample(long long n, const PointAt& point, const std::vector<std::uint64_t>& key, const KeyBox* box = nullptr) {
   {
     Points out;
-    if (downsampleDense(n, point, key, out)) return out;
+    if (downsampleDense(n, point, key, out, box)) return out;
   }
   // The cells are shared out among the cores by a hash of their key: each
   // numbers and sums its own over all points in input order (the same sums,
@@ -263,7 +275,10 @@ Points sanitizeAndDownsample(const pcl::PointCloud<pcl::PointXYZ>& cloud, double
   const long long n = static_cast<long long>(cloud.size());
   std::vector<std::uint64_t> key(cloud.size());
   long long valid = 0;
-#pragma omp parallel for schedule(dynamic, 16384) reduction(+ : valid) if (n >= 50000)
+  // The keys' bounding box too (for the dense index), in the same pass.
+  int lx = std::numeric_limits<int>::max(), ly = lx, lz = lx, hx = -lx, hy = -lx, hz = -lx;
+#pragma omp parallel for schedule(dynamic, 16384) reduction(+ : valid) reduction(min : lx, ly, lz) \
+    reduction(max : hx, hy, hz) if (n >= 50000)
   for (long long i = 0; i < n; ++i) {
     const pcl::PointXYZ& p = cloud.points[i];
     // The test of sanitize.
@@ -271,14 +286,19 @@ Points sanitizeAndDownsample(const pcl::PointCloud<pcl::PointXYZ>& cloud, double
         std::abs(p.y) <= lim && std::abs(p.z) <= lim) {
       const Eigen::Vector3i c = cellOf(Eigen::Vector3f(p.x, p.y, p.z), inv);
       key[i] = packCell(c.x(), c.y(), c.z());
+      const Eigen::Vector3i u = unpackCell(key[i]);
+      lx = std::min(lx, u.x()), ly = std::min(ly, u.y()), lz = std::min(lz, u.z());
+      hx = std::max(hx, u.x()), hy = std::max(hy, u.y()), hz = std::max(hz, u.z());
       ++valid;
     } else {
       key[i] = kNoKey;
     }
   }
   if (kept) *kept = static_cast<std::size_t>(valid);
+  const KeyBox box{Eigen::Vector3i(lx, ly, lz), Eigen::Vector3i(hx, hy, hz), valid > 0};
   return downsample(
-      n, [&](long long i) { return Eigen::Vector3f(cloud.points[i].x, cloud.points[i].y, cloud.points[i].z); }, key);
+      n, [&](long long i) { return Eigen::Vector3f(cloud.points[i].x, cloud.points[i].y, cloud.points[i].z); }, key,
+      &box);
 }
 
 std::optional<Eigen::Vector3d> estimateUp(const Points& points, const Points& normals, unsigned seed) {

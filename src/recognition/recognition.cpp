@@ -1,4 +1,5 @@
 #include "door_state_recognition/recognition/recognition.hpp"
+#include "door_state_recognition/util/floor.hpp"
 #include "door_state_recognition/util/radix_sort.hpp"
 
 #include <Eigen/Eigenvalues>
@@ -218,7 +219,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   const double d_view = wall.signedDistance(viewpoint);
   if (d_view <= 0) return {};
   auto cellAt = [&](double s, double z) -> Cell* {
-    const int c = static_cast<int>(std::floor((s - s_lo) / cell)), r = static_cast<int>(std::floor((z - floor_z) / row_h));
+    const int c = util::floorToInt((s - s_lo) / cell), r = util::floorToInt((z - floor_z) / row_h);
     if (c < 0 || c >= cols || r < 0 || r >= rows) return nullptr;
     return &grid[static_cast<std::size_t>(r) * cols + c];
   };
@@ -240,7 +241,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     // ranks (the same value as selecting from the pooled window each time).
     std::vector<std::pair<float, int>> dev;  // deviation, column
     for (int i : wall.inliers) {
-      const int c = static_cast<int>(std::floor((wall.along(points[i]) - s_lo) / cell));
+      const int c = util::floorToInt((wall.along(points[i]) - s_lo) / cell);
       if (c >= 0 && c < cols) dev.push_back({static_cast<float>(std::abs(wall.signedDistance(points[i]))), c});
     }
     util::sortPairs(dev);  // std::sort's order, in linear time
@@ -272,7 +273,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     }
   }
   auto tolAt = [&](double s) {
-    const int c = static_cast<int>(std::floor((s - s_lo) / cell));
+    const int c = util::floorToInt((s - s_lo) / cell);
     return col_tol[std::clamp(c, 0, cols - 1)];
   };
   // Points at the wall's body height within its face and 0.6 m behind it:

@@ -118,22 +118,29 @@ void NeighbourGrid::neighbourCells(std::size_t c, int ring, std::vector<std::uin
   if (!dense_.empty() && ring <= 2) {
     // The same cells in the same order as below, a row of coarse cells at a
     // time: a cell's coarse cell lies a coarse cell or more inside the box,
-    // so 2 cells around it stay inside.
-    for (int dz = -ring; dz <= ring; ++dz) {
-      const int z = k.z() + dz;
-      for (int dy = -ring; dy <= ring; ++dy) {
-        const int y = k.y() + dy;
-        const std::size_t row = (static_cast<std::size_t>(half(z) - lo_.z()) * dims_.y() + (half(y) - lo_.y())) * dims_.x();
-        const int parity_yz = 2 * (y & 1) + 4 * (z & 1);
-        for (int dx = -ring; dx <= ring; ++dx) {
-          const int x = k.x() + dx;
-          const std::uint32_t kc = dense_[row + (half(x) - lo_.x())];
+    // so 2 cells around it stay inside. Each axis's offsets into the box and
+    // child parities are worked out once, for the 2 ring + 1 steps.
+    std::size_t ox[5], oy[5], oz[5];
+    int px[5], py[5], pz[5];
+    for (int d = -ring; d <= ring; ++d) {
+      const int x = k.x() + d, y = k.y() + d, z = k.z() + d;
+      ox[d + ring] = static_cast<std::size_t>(half(x) - lo_.x());
+      oy[d + ring] = static_cast<std::size_t>(half(y) - lo_.y()) * dims_.x();
+      oz[d + ring] = static_cast<std::size_t>(half(z) - lo_.z()) * dims_.y() * dims_.x();
+      px[d + ring] = x & 1, py[d + ring] = 2 * (y & 1), pz[d + ring] = 4 * (z & 1);
+    }
+    const int n = 2 * ring + 1;
+    for (int iz = 0; iz < n; ++iz)
+      for (int iy = 0; iy < n; ++iy) {
+        const std::size_t row = oz[iz] + oy[iy];
+        const int parity_yz = py[iy] + pz[iz];
+        for (int ix = 0; ix < n; ++ix) {
+          const std::uint32_t kc = dense_[row + ox[ix]];
           if (kc == CellMap::kNone) continue;
-          const std::uint32_t o = children_[8 * static_cast<std::size_t>(kc) + (x & 1) + parity_yz];
+          const std::uint32_t o = children_[8 * static_cast<std::size_t>(kc) + px[ix] + parity_yz];
           if (o != CellMap::kNone) cells.push_back(o);
         }
       }
-    }
     return;
   }
   for (int dz = -ring; dz <= ring; ++dz)

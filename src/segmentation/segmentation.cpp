@@ -7,10 +7,15 @@
 #include <algorithm>
 #include <limits>
 #include <cmath>
+#include <exception>
 #include <random>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
+#endif
+
+#ifdef _OPENMP
+#include <omp.h>
 #endif
 
 namespace dsr {
@@ -40,14 +45,24 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
   // Moments of every cell, once: count, sum and sum of outer products, about
   // one origin in the cloud (in double, exact enough for centimetre spreads
   // up to max_abs_coordinate away), so that cells' moments simply add.
+  // The sum of outer products is kept as its upper triangle (xx xy xz yy yz
+  // zz): the lower one mirrors it exactly (d_i d_j = d_j d_i, and sums of
+  // equal terms in the same order are equal), and 80 bytes a cell read 27
+  // times over where 104 were.
   struct Moments {
     double n = 0;
-    Eigen::Vector3d s = Eigen::Vector3d::Zero();
-    Eigen::Matrix3d ss = Eigen::Matrix3d::Zero();
+    double s[3] = {0, 0, 0};
+    double q[6] = {0, 0, 0, 0, 0, 0};
     void add(const Moments& b) {
       n += b.n;
-      s += b.s;
-      ss += b.ss;
+      for (int k = 0; k < 3; ++k) s[k] += b.s[k];
+      for (int k = 0; k < 6; ++k) q[k] += b.q[k];
+    }
+    void addPoint(const Eigen::Vector3d& d) {
+      n += 1;
+      for (int k = 0; k < 3; ++k) s[k] += d[k];
+      q[0] += d.x() * d.x(), q[1] += d.x() * d.y(), q[2] += d.x() * d.z();
+      q[3] += d.y() * d.y(), q[4] += d.y() * d.z(), q[5] += d.z() * d.z();
     }
   };
   const std::size_t cells = grid.cells();
@@ -56,10 +71,7 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
 #pragma omp parallel for schedule(static, 1024)
   for (long long c = 0; c < static_cast<long long>(cells); ++c) {
     for (const int* it = grid.cellBegin(c); it != grid.cellEnd(c); ++it) {
-      const Eigen::Vector3d d = grid.point(*it).cast<double>() - origin;
-      m[c].n += 1;
-      m[c].s += d;
-      m[c].ss += d * d.transpose();
+      m[c].addPoint(grid.point(*it).cast<double>() - origin);
     }
   }
   // A coarse level (cells twice as wide) for sparse surroundings: 27 coarse
@@ -112,8 +124,10 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
   auto pca = [](const Moments& acc) {
     Pca r;
     if (acc.n < 3) return r;  // isolated: no normal (zero), curvature 1
-    const Eigen::Vector3d mean = acc.s / acc.n;
-    const Eigen::Matrix3d C = acc.ss / acc.n - mean * mean.transpose();
+    const Eigen::Vector3d mean = Eigen::Vector3d(acc.s[0], acc.s[1], acc.s[2]) / acc.n;
+    Eigen::Matrix3d ss;
+    ss << acc.q[0], acc.q[1], acc.q[2], acc.q[1], acc.q[3], acc.q[4], acc.q[2], acc.q[4], acc.q[5];
+    const Eigen::Matrix3d C = ss / acc.n - mean * mean.transpose();
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
     es.computeDirect(C);
     r.n = es.eigenvectors().col(0).cast<float>().normalized();
@@ -253,12 +267,27 @@ ViewTop viewTop(const Points& points, const Eigen::Vector3f& viewpoint) {
   v.viewpoint = viewpoint;
   v.max_tan.assign(kViewTopBins, -std::numeric_limits<float>::infinity());
   v.min_tan.assign(kViewTopBins, std::numeric_limits<float>::infinity());
-  for (const auto& q : points) {
-    const int b = v.bin(q);
-    if (b < 0) continue;
-    const float t = v.tanElevation(q);
-    v.max_tan[b] = std::max(v.max_tan[b], t);
-    v.min_tan[b] = std::min(v.min_tan[b], t);
+  // Over the cores, each into bins of its own, then merged: a least or
+  // greatest value is the same whatever the order it is taken in.
+  const long long n = static_cast<long long>(points.size());
+#pragma omp parallel if (n >= 20000)
+  {
+    std::vector<float> hi(kViewTopBins, -std::numeric_limits<float>::infinity());
+    std::vector<float> lo(kViewTopBins, std::numeric_limits<float>::infinity());
+#pragma omp for schedule(static) nowait
+    for (long long i = 0; i < n; ++i) {
+      const auto& q = points[i];
+      const int b = v.bin(q);
+      if (b < 0) continue;
+      const float t = v.tanElevation(q);
+      hi[b] = std::max(hi[b], t);
+      lo[b] = std::min(lo[b], t);
+    }
+#pragma omp critical(dsr_view_top)
+    for (int b = 0; b < kViewTopBins; ++b) {
+      v.max_tan[b] = std::max(v.max_tan[b], hi[b]);
+      v.min_tan[b] = std::min(v.min_tan[b], lo[b]);
+    }
   }
   return v;
 }
@@ -394,106 +423,174 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
   }
 }
 
+namespace {
+
+// RANSAC never stops before this many draws.
+constexpr int kMinRansacIterations = 20;
+// Below these (sample points scored, a plane's inliers) the work of a RANSAC
+// round is too small to hand to the other thread: waiting for it could cost
+// more (a thread of a loaded machine waits for its turn on a core).
+constexpr std::size_t kTaskSample = 4000, kTaskInliers = 1000;
+
+// Of the n sample points (x, y, normal nx_i, ny_i), those within wd of the
+// line through (qx, qy) with normal (nx, ny) whose normal agrees (|n . n_i|
+// > agree), without branches.
+std::size_t countInliers(const float* x, const float* y, const float* nxs, const float* nys, std::size_t n, double qx,
+                         double qy, double nx, double ny, double wd, double agree) {
+  std::size_t count = 0, j = 0;
+#if defined(__SSE2__)
+  {  // two at a time: the same double operations, in the same order
+    const __m128d vqx = _mm_set1_pd(qx), vqy = _mm_set1_pd(qy), vnx = _mm_set1_pd(nx), vny = _mm_set1_pd(ny);
+    const __m128d vwd = _mm_set1_pd(wd), vag = _mm_set1_pd(agree);
+    const __m128d abs_mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
+    auto load2 = [](const float* f) { return _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(f)))); };
+    for (; j + 2 <= n; j += 2) {
+      const __m128d dist = _mm_add_pd(_mm_mul_pd(_mm_sub_pd(load2(&x[j]), vqx), vnx),
+                                      _mm_mul_pd(_mm_sub_pd(load2(&y[j]), vqy), vny));
+      const __m128d dot = _mm_add_pd(_mm_mul_pd(vnx, load2(&nxs[j])), _mm_mul_pd(vny, load2(&nys[j])));
+      const __m128d in = _mm_and_pd(_mm_cmplt_pd(_mm_and_pd(dist, abs_mask), vwd),
+                                    _mm_cmpgt_pd(_mm_and_pd(dot, abs_mask), vag));
+      const int bits = _mm_movemask_pd(in);
+      count += static_cast<std::size_t>((bits & 1) + (bits >> 1));
+    }
+  }
+#endif
+  for (; j < n; ++j) {
+    const double dist = (static_cast<double>(x[j]) - qx) * nx + (static_cast<double>(y[j]) - qy) * ny;
+    const double dot = nx * static_cast<double>(nxs[j]) + ny * static_cast<double>(nys[j]);
+    count += static_cast<std::size_t>((std::abs(dist) < wd) & (std::abs(dot) > agree));
+  }
+  return count;
+}
+
+}  // namespace
+
 std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, double floor_z, double height_top,
                                  bool ceiling_known, const Eigen::Vector2d& viewpoint, const Parameters& p,
-                                 const ViewTop* view) {
+                                 const ViewTop* view, const OnWall& on_wall) {
   std::vector<int> pool;
   for (std::size_t i = 0; i < points.size(); ++i)
     if (std::abs(normals.n[i].z()) < p.vertical_normal_z && points[i].z() > floor_z + 0.05) pool.push_back(static_cast<int>(i));
   std::vector<WallPlane> walls;
   std::mt19937 rng(static_cast<unsigned>(p.random_seed));
   std::vector<float> sx, sy, snx, sny;  // the scored sample, side by side
-  for (int round = 0; round < 4 * p.max_walls && static_cast<int>(walls.size()) < p.max_walls; ++round) {
-    if (static_cast<int>(pool.size()) < p.min_wall_points) break;
-    // 1-point RANSAC: a point with its (horizontal) normal proposes a plane.
-    std::uniform_int_distribution<std::size_t> pick(0, pool.size() - 1);
-    std::size_t best_count = 0;
-    Eigen::Vector2d best_pt, best_n;
-    const std::size_t stride = std::max<std::size_t>(1, pool.size() / 20000);
-    const double sampled = static_cast<double>((pool.size() + stride - 1) / stride);
-    // Adaptive: stop once a plane larger than the best would have been drawn
-    // with probability 0.999 (capped by ransac_iterations).
-    int needed = p.ransac_iterations;
-    // The scored sample (every stride-th point of the pool) in arrays of
-    // x, y and the normal's x, y, read in turn instead of gathered.
-    sx.clear(), sy.clear(), snx.clear(), sny.clear();
-    for (std::size_t j = 0; j < pool.size(); j += stride) {
-      const int i = pool[j];
-      sx.push_back(points[i].x()), sy.push_back(points[i].y());
-      snx.push_back(normals.n[i].x()), sny.push_back(normals.n[i].y());
-    }
-    const std::size_t ns = sx.size();
-    const double wd = p.wall_distance, agree = p.wall_normal_agreement;
-    for (int it = 0; it < std::min(needed, p.ransac_iterations); ++it) {
-      const int s = pool[pick(rng)];
-      Eigen::Vector2d n(normals.n[s].x(), normals.n[s].y());
-      if (n.norm() < 0.5) continue;
-      n.normalize();
-      const Eigen::Vector2d q(points[s].x(), points[s].y());
-      // |(r - q) . n| < wall_distance and |n . n_i| > agreement, without branches.
-      const double qx = q.x(), qy = q.y(), nx = n.x(), ny = n.y();
-      std::size_t count = 0, j = 0;
-#if defined(__SSE2__)
-      {  // two at a time: the same double operations, in the same order
-        const __m128d vqx = _mm_set1_pd(qx), vqy = _mm_set1_pd(qy), vnx = _mm_set1_pd(nx), vny = _mm_set1_pd(ny);
-        const __m128d vwd = _mm_set1_pd(wd), vag = _mm_set1_pd(agree);
-        const __m128d abs_mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
-        auto load2 = [](const float* f) { return _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(f)))); };
-        for (; j + 2 <= ns; j += 2) {
-          const __m128d dist = _mm_add_pd(_mm_mul_pd(_mm_sub_pd(load2(&sx[j]), vqx), vnx),
-                                          _mm_mul_pd(_mm_sub_pd(load2(&sy[j]), vqy), vny));
-          const __m128d dot = _mm_add_pd(_mm_mul_pd(vnx, load2(&snx[j])), _mm_mul_pd(vny, load2(&sny[j])));
-          const __m128d in = _mm_and_pd(_mm_cmplt_pd(_mm_and_pd(dist, abs_mask), vwd),
-                                        _mm_cmpgt_pd(_mm_and_pd(dot, abs_mask), vag));
-          const int bits = _mm_movemask_pd(in);
-          count += static_cast<std::size_t>((bits & 1) + (bits >> 1));
-        }
-      }
+  // A round's wall rules (addWallSegments) run as a task on the other core
+  // while this one draws the next round's plane, which needs only the pool
+  // and the generator, not the walls. The rules of consecutive rounds still
+  // run in turn (the shadow test reads the walls before), and a round is
+  // kept only if the walls found before it leave room (max_walls), as in a
+  // loop that waited for them: one drawn past the last is dropped unused.
+  std::exception_ptr error;
+  std::vector<int> task_inl;  // the inliers the running task reads
+  int threads = 1;
+#ifdef _OPENMP
+  threads = std::min(2, omp_get_max_threads());
 #endif
-      for (; j < ns; ++j) {
-        const double dist = (static_cast<double>(sx[j]) - qx) * nx + (static_cast<double>(sy[j]) - qy) * ny;
-        const double dot = nx * static_cast<double>(snx[j]) + ny * static_cast<double>(sny[j]);
-        count += static_cast<std::size_t>((std::abs(dist) < wd) & (std::abs(dot) > agree));
+#pragma omp parallel num_threads(threads) if (threads > 1)
+#pragma omp single
+  try {
+    for (int round = 0; round < 4 * p.max_walls; ++round) {
+      if (static_cast<int>(pool.size()) < p.min_wall_points) break;
+      // 1-point RANSAC: a point with its (horizontal) normal proposes a plane.
+      std::uniform_int_distribution<std::size_t> pick(0, pool.size() - 1);
+      std::size_t best_count = 0;
+      Eigen::Vector2d best_pt, best_n;
+      const std::size_t stride = std::max<std::size_t>(1, pool.size() / 20000);
+      const double sampled = static_cast<double>((pool.size() + stride - 1) / stride);
+      // Adaptive: stop once a plane larger than the best would have been drawn
+      // with probability 0.999 (capped by ransac_iterations).
+      int needed = p.ransac_iterations;
+      // The scored sample (every stride-th point of the pool) in arrays of
+      // x, y and the normal's x, y, read in turn instead of gathered.
+      sx.clear(), sy.clear(), snx.clear(), sny.clear();
+      for (std::size_t j = 0; j < pool.size(); j += stride) {
+        const int i = pool[j];
+        sx.push_back(points[i].x()), sy.push_back(points[i].y());
+        snx.push_back(normals.n[i].x()), sny.push_back(normals.n[i].y());
       }
-      if (count > best_count) {
-        best_count = count, best_pt = q, best_n = n;
-        const double w = std::min(0.999, best_count / sampled);
-        needed = std::max(20, static_cast<int>(std::ceil(std::log(0.001) / std::log(1.0 - w))));
-      }
-    }
-    if (best_count * stride < static_cast<std::size_t>(p.min_wall_points)) break;
-    // Refine twice by TLS on the inliers.
-    std::vector<int> inl;
-    for (int pass = 0; pass < 3; ++pass) {
-      inl.clear();
-      std::vector<Eigen::Vector2d> q2;
-      for (int i : pool) {
-        const Eigen::Vector2d r(points[i].x(), points[i].y());
-        if (std::abs((r - best_pt).dot(best_n)) < p.wall_distance &&
-            std::abs(best_n.x() * normals.n[i].x() + best_n.y() * normals.n[i].y()) > p.wall_normal_agreement) {
-          inl.push_back(i);
-          q2.push_back(r);
+      const std::size_t ns = sx.size();
+      const double wd = p.wall_distance, agree = p.wall_normal_agreement;
+      // The plane of pool point s scored on the sample (0 if s has no normal).
+      auto score = [&](int s) -> std::size_t {
+        Eigen::Vector2d n(normals.n[s].x(), normals.n[s].y());
+        if (n.norm() < 0.5) return 0;
+        n.normalize();
+        return countInliers(sx.data(), sy.data(), snx.data(), sny.data(), ns, points[s].x(), points[s].y(), n.x(),
+                            n.y(), wd, agree);
+      };
+      // The first kMinRansacIterations draws are scored whatever they score
+      // (needed never falls below): drawn in turn as the loop draws them, and
+      // scored as tasks, two at once (a small sample here: no tasks, no wait
+      // on the other thread).
+      const int always = std::min(kMinRansacIterations, p.ransac_iterations);
+      std::vector<int> drawn(always);
+      std::vector<std::size_t> counts(always, 0);
+      for (int it = 0; it < always; ++it) drawn[it] = pool[pick(rng)];
+#pragma omp taskloop default(shared) num_tasks(2) if (ns >= kTaskSample)
+      for (int it = 0; it < always; ++it) counts[it] = score(drawn[it]);
+      for (int it = 0; it < std::min(needed, p.ransac_iterations); ++it) {
+        const int s = it < always ? drawn[it] : pool[pick(rng)];
+        Eigen::Vector2d n(normals.n[s].x(), normals.n[s].y());
+        if (n.norm() < 0.5) continue;
+        n.normalize();
+        const Eigen::Vector2d q(points[s].x(), points[s].y());
+        const std::size_t count = it < always ? counts[it] : score(s);
+        if (count > best_count) {
+          best_count = count, best_pt = q, best_n = n;
+          const double w = std::min(0.999, best_count / sampled);
+          needed = std::max(kMinRansacIterations, static_cast<int>(std::ceil(std::log(0.001) / std::log(1.0 - w))));
         }
       }
-      if (q2.size() < 3 || pass == 2) break;
-      Eigen::Vector2d c, dir;
-      fitLine(q2, c, dir);
-      best_pt = c;
-      best_n = Eigen::Vector2d(-dir.y(), dir.x());
+      if (best_count * stride < static_cast<std::size_t>(p.min_wall_points)) break;
+      // Refine twice by TLS on the inliers.
+      std::vector<int> inl;
+      for (int pass = 0; pass < 3; ++pass) {
+        inl.clear();
+        std::vector<Eigen::Vector2d> q2;
+        for (int i : pool) {
+          const Eigen::Vector2d r(points[i].x(), points[i].y());
+          if (std::abs((r - best_pt).dot(best_n)) < p.wall_distance &&
+              std::abs(best_n.x() * normals.n[i].x() + best_n.y() * normals.n[i].y()) > p.wall_normal_agreement) {
+            inl.push_back(i);
+            q2.push_back(r);
+          }
+        }
+        if (q2.size() < 3 || pass == 2) break;
+        Eigen::Vector2d c, dir;
+        fitLine(q2, c, dir);
+        best_pt = c;
+        best_n = Eigen::Vector2d(-dir.y(), dir.x());
+      }
+      // Remove the inliers from the pool whatever becomes of them.
+      {
+        std::vector<char> used(points.size(), 0);
+        for (int i : inl) used[i] = 1;
+        std::vector<int> rest;
+        for (int i : pool)
+          if (!used[i]) rest.push_back(i);
+        pool.swap(rest);
+      }
+      const Eigen::Vector2d dir(best_n.y(), -best_n.x());
+      if ((viewpoint - best_pt).dot(best_n) < 0) best_n = -best_n;
+#pragma omp taskwait
+      if (error || static_cast<int>(walls.size()) >= p.max_walls) break;
+      task_inl.swap(inl);
+#pragma omp task default(shared) firstprivate(best_pt, best_n, dir) if (task_inl.size() >= kTaskInliers)
+      try {
+        const std::size_t before = walls.size();
+        addWallSegments(points, task_inl, best_pt, dir, best_n, floor_z, height_top, ceiling_known, p, walls, view,
+                        &viewpoint);
+        if (on_wall)
+          for (std::size_t i = before; i < walls.size(); ++i) on_wall(i, walls[i]);
+      } catch (...) {
+        error = std::current_exception();
+      }
     }
-    // Remove the inliers from the pool whatever becomes of them.
-    {
-      std::vector<char> used(points.size(), 0);
-      for (int i : inl) used[i] = 1;
-      std::vector<int> rest;
-      for (int i : pool)
-        if (!used[i]) rest.push_back(i);
-      pool.swap(rest);
-    }
-    const Eigen::Vector2d dir(best_n.y(), -best_n.x());
-    if ((viewpoint - best_pt).dot(best_n) < 0) best_n = -best_n;
-    addWallSegments(points, inl, best_pt, dir, best_n, floor_z, height_top, ceiling_known, p, walls, view, &viewpoint);
+  } catch (...) {
+#pragma omp taskwait
+    if (!error) error = std::current_exception();
   }
+  if (error) std::rethrow_exception(error);
   return walls;
 }
 

@@ -1,11 +1,11 @@
 #include "door_state_recognition/state/door_state.hpp"
+#include "door_state_recognition/util/floor.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <exception>
 #include <limits>
-#include <set>
 
 namespace dsr {
 namespace state {
@@ -167,45 +167,39 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     return withinReach(s - door.s0, d + t / 2) || withinReach(s - door.s1, d + t / 2);
   };
 
+  // The points near the doorway (and those in the wall band inside it), and
+  // the rays passing near it: two passes over every point, independent, so
+  // run at once when both are needed (one is not when the band's points
+  // alone can end the search, below).
   std::vector<Local> pts, band;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const auto& q = points[i];
-    if (q.z() < z0 || q.z() >= z1) continue;
-    const double s = wall.along(q), d = wall.signedDistance(q);
-    if (!nearJamb(s, d)) continue;
-    const int zb = std::min(nz - 1, static_cast<int>((q.z() - z0) / zbin));
-    const bool inside = s > door.s0 + 0.03 && s < door.s1 - 0.03;
-    const bool in_wall_band = d > -t - 0.03 && d < p.face_tolerance + 0.01;
-    // A closed leaf may sit deeper than the estimated thickness (jambs unseen).
-    if (inside && d > -std::max(t, 0.3) - 0.03 && d < p.face_tolerance + 0.01) band.push_back({s, d, zb, static_cast<int>(i)});
-    if (in_wall_band && !inside) continue;  // wall, trim and jambs beside the doorway
-    pts.push_back({s, d, zb, static_cast<int>(i)});
-  }
-
-  // A closed leaf anywhere inside the wall's thickness (flush or recessed).
-  const double expected = static_cast<double>(std::max(1, static_cast<int>(std::ceil(L / abin)))) * nz;
-  std::set<std::pair<int, int>> band_cells;
-  std::vector<Eigen::Vector2d> band_xy;
-  for (const Local& q : band) {
-    band_cells.insert({static_cast<int>((q.s - door.s0) / abin), q.zbin});
-    band_xy.emplace_back(q.s, q.d);
-  }
-  const double band_cov = std::min(1.0, band_cells.size() / expected);
-  fit.candidate_points = static_cast<int>(pts.size());
-  if (closed_band_only_above > 0 && band_cov <= closed_band_only_above) {
-    fit.searched = false;
-    fit.best_coverage = band_cov;
-    return fit;
-  }
+  auto gatherPoints = [&] {
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const auto& q = points[i];
+      if (q.z() < z0 || q.z() >= z1) continue;
+      const double s = wall.along(q), d = wall.signedDistance(q);
+      if (!nearJamb(s, d)) continue;
+      const int zb = std::min(nz - 1, static_cast<int>((q.z() - z0) / zbin));
+      const bool inside = s > door.s0 + 0.03 && s < door.s1 - 0.03;
+      const bool in_wall_band = d > -t - 0.03 && d < p.face_tolerance + 0.01;
+      // A closed leaf may sit deeper than the estimated thickness (jambs unseen).
+      if (inside && d > -std::max(t, 0.3) - 0.03 && d < p.face_tolerance + 0.01) band.push_back({s, d, zb, static_cast<int>(i)});
+      if (in_wall_band && !inside) continue;  // wall, trim and jambs beside the doorway
+      pts.push_back({s, d, zb, static_cast<int>(i)});
+    }
+  };
 
   // Rays from the sensor that pass near the doorway: a leaf cannot stand
   // where a ray went through to something farther away (free space).
+  // Every ray starts at the sensor, (s, d) = vsd at height vsz: a ray holds
+  // only its end (the searches read every ray at every hinge; a compact ray
+  // spares the memory traffic).
   struct Ray {
-    Eigen::Vector2d v, q;  // (s, d) of sensor and point
-    double vz, qz, len;
+    Eigen::Vector2d q;  // (s, d) of the point
+    double qz, len;
   };
   std::vector<Ray> rays;
   const Eigen::Vector2d vsd(wall.along(viewpoint), wall.signedDistance(viewpoint));
+  const double vsz = viewpoint.z();
   const Eigen::Vector2d dc(s_mid, -t / 2);
   // A return whose ray from the sensor passes near the doorway: its (s, d)
   // and the ray's squared length in the wall's plan.
@@ -217,18 +211,46 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     const double lam = std::clamp((dc - vsd).dot(r) / len2, 0.0, 1.0);
     return !((vsd + lam * r - dc).norm() > reach + Lmax);
   };
-  for (const auto& q : points) {
-    Eigen::Vector2d qsd;
-    double len2;
-    if (nearDoorway(q, qsd, len2)) rays.push_back({vsd, qsd, viewpoint.z(), q.z(), std::sqrt(len2)});
+  auto gatherRays = [&] {
+    for (const auto& q : points) {
+      Eigen::Vector2d qsd;
+      double len2;
+      if (nearDoorway(q, qsd, len2)) rays.push_back({qsd, q.z(), std::sqrt(len2)});
+    }
+    // Enough rays to see free space at 5 cm x 10 cm cells; more only cost time.
+    if (rays.size() > 15000) {
+      const std::size_t stride = (rays.size() + 14999) / 15000;
+      std::vector<Ray> thin;
+      for (std::size_t i = 0; i < rays.size(); i += stride) thin.push_back(rays[i]);
+      rays.swap(thin);
+    }
+  };
+  const bool rays_needed = closed_band_only_above <= 0;
+  if (rays_needed) {
+    forEachTask(2, [&](std::size_t i) { i == 0 ? gatherPoints() : gatherRays(); });
+  } else {
+    gatherPoints();
   }
-  // Enough rays to see free space at 5 cm x 10 cm cells; more only cost time.
-  if (rays.size() > 15000) {
-    const std::size_t stride = (rays.size() + 14999) / 15000;
-    std::vector<Ray> thin;
-    for (std::size_t i = 0; i < rays.size(); i += stride) thin.push_back(rays[i]);
-    rays.swap(thin);
+
+  // A closed leaf anywhere inside the wall's thickness (flush or recessed).
+  // Its cells holding points: (leaf bin, z bin) pairs, counted once each.
+  const double expected = static_cast<double>(std::max(1, static_cast<int>(std::ceil(L / abin)))) * nz;
+  std::vector<std::pair<int, int>> band_cells;
+  std::vector<Eigen::Vector2d> band_xy;
+  for (const Local& q : band) {
+    band_cells.push_back({static_cast<int>((q.s - door.s0) / abin), q.zbin});
+    band_xy.emplace_back(q.s, q.d);
   }
+  std::sort(band_cells.begin(), band_cells.end());
+  band_cells.erase(std::unique(band_cells.begin(), band_cells.end()), band_cells.end());
+  const double band_cov = std::min(1.0, band_cells.size() / expected);
+  fit.candidate_points = static_cast<int>(pts.size());
+  if (closed_band_only_above > 0 && band_cov <= closed_band_only_above) {
+    fit.searched = false;
+    fit.best_coverage = band_cov;
+    return fit;
+  }
+  if (!rays_needed) gatherRays();
 
   // Exhaustive search over hinge side, swing side and angle: cells of the
   // leaf holding points (support) against cells rays went through (contradiction).
@@ -281,14 +303,16 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       P[ai] = H + K[ai] * (lt / 2);  // the leaf's mid-plane
     }
   };
-  // f(i) for every angle start + i step of w within [lo, hi] degrees, modulo 360.
-  auto forArc = [&](const HingeRun& w, double lo, double hi, auto&& f) {
+  // f(i) for every angle start + i step of w within [lo, hi] degrees, modulo
+  // 360, and with i in [first, last] (f is not called outside it).
+  auto forArc = [&](const HingeRun& w, double lo, double hi, auto&& f, int first = 0, int last = -1) {
+    if (last < 0) last = w.count - 1;
     const double end = w.start + (w.count - 1) * w.step;
     for (double shift = -360; shift <= 360; shift += 360) {
       const double a = lo + shift, b = hi + shift;
       if (b < w.start - w.step || a > end + w.step) continue;  // no angle of the run
-      const int i0 = std::max(0, static_cast<int>(std::ceil((a - w.start) / w.step - 1e-9)));
-      const int i1 = std::min(w.count - 1, static_cast<int>(std::floor((b - w.start) / w.step + 1e-9)));
+      const int i0 = std::max(first, util::ceilToInt((a - w.start) / w.step - 1e-9));
+      const int i1 = std::min(last, util::floorToInt((b - w.start) / w.step + 1e-9));
       for (int i = i0; i <= i1; ++i) f(i);
     }
   };
@@ -331,12 +355,19 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   auto scoreRays = [&](HingeRun& w, const std::vector<char>* need) {
     std::vector<char> blocked(w.count * cells, 0);  // per angle: leaf bin x z bin
     w.con.assign(static_cast<std::size_t>(w.count) * na_max, 0);
+    // The angles needed lie in [first, last]: a test outside would return at once.
+    int first = 0, last = w.count - 1;
+    if (need) {
+      while (first <= last && !(*need)[first]) ++first;
+      while (last >= first && !(*need)[last]) --last;
+      if (first > last) return;
+    }
     std::vector<Eigen::Vector2d> E, K, P;
     axes(w, E, K, P);
     const Eigen::Vector2d H(w.s_h, w.d_h);
     for (const Ray& ray : rays) {
       // The part of the ray that counts: from the sensor to 6 cm before its point.
-      const Eigen::Vector2d A = ray.v, B = ray.q - (0.06 / ray.len) * (ray.q - ray.v);
+      const Eigen::Vector2d A = vsd, B = ray.q - (0.06 / ray.len) * (ray.q - vsd);
       const Eigen::Vector2d u = B - A, w0 = A - H;
       const double uu = u.squaredNorm();
       if (uu < 1e-12) continue;
@@ -348,14 +379,14 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       if (t0 >= t1) continue;
       // Every crossing with a leaf lies on that chord: a ray passing above or
       // below the leaf's heights there crosses none (1 mm spares rounding).
-      const double lam_max = 1 - 0.06 / ray.len, dz = ray.qz - ray.vz;
-      const double za = ray.vz + t0 * lam_max * dz, zb = ray.vz + t1 * lam_max * dz;
+      const double lam_max = 1 - 0.06 / ray.len, dz = ray.qz - vsz;
+      const double za = vsz + t0 * lam_max * dz, zb = vsz + t1 * lam_max * dz;
       if (std::max(za, zb) < z0 - 1e-3 || std::min(za, zb) >= z1 + 1e-3) continue;
-      const Eigen::Vector2d r = ray.q - ray.v;
+      const Eigen::Vector2d r = ray.q - vsd;
       auto test = [&](int ai) {
         if (need && !(*need)[ai]) return;
         double a, z;
-        if (!crossLeaf(ray.v, r, ray.vz, dz, lam_max, P[ai], E[ai], a, z) || a < 0.05 || a >= Lmax || z < z0 || z >= z1)
+        if (!crossLeaf(vsd, r, vsz, dz, lam_max, P[ai], E[ai], a, z) || a < 0.05 || a >= Lmax || z < z0 || z >= z1)
           return;
         const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
         char& f = blocked[ai * cells + static_cast<std::size_t>(ab) * nz + std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
@@ -364,7 +395,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       const double tc = std::clamp(-bq / uu, t0, t1);
       const double rho_min = (w0 + tc * u).norm();
       if (rho_min <= std::max(0.05, lt / 2)) {
-        for (int ai = 0; ai < w.count; ++ai) test(ai);
+        for (int ai = first; ai <= last; ++ai) test(ai);
         continue;
       }
       const double c0 = fastAtan2Deg(w.m * (w0 + t0 * u).y(), w.e0 * (w0 + t0 * u).x());
@@ -376,7 +407,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       // The leaf's mid-line passes a point X of the chord (bearing c, distance
       // rho) at th = c + asin(lt / 2 / rho): the arc widens on one side only.
       const double dl = asinAbove(std::min(1.0, lt / 2 / rho_min)) * 180 / M_PI + kBearingSlackDeg;
-      forArc(w, lo - kBearingSlackDeg, hi + dl, test);
+      forArc(w, lo - kBearingSlackDeg, hi + dl, test, first, last);
     }
   };
   auto finishScores = [&](HingeRun& w, const std::vector<char>* need) {
@@ -467,16 +498,16 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       for (int i = 0; i < ns; ++i) any |= (*need)[i][ai] != 0;
       if (!any) return;
       for (const Ray& ray : rays) {
-        const Eigen::Vector2d r = ray.q - ray.v;
+        const Eigen::Vector2d r = ray.q - vsd;
         const double denom = r.x() * Ea.y() - r.y() * Ea.x();
         if (std::abs(denom) < 1e-9) continue;  // crossLeaf: parallel, crosses at no hinge
-        const double lam_max = 1 - 0.06 / ray.len, dz = ray.qz - ray.vz;
+        const double lam_max = 1 - 0.06 / ray.len, dz = ray.qz - vsz;
         // w = P - v: w.y the same at every hinge, w.x = s_h + (K.x lt / 2 - v.x) =: s_h + off.
-        const double wy = P[0][ai].y() - ray.v.y(), off = Ka.x() * (lt / 2) - ray.v.x();
+        const double wy = P[0][ai].y() - vsd.y(), off = Ka.x() * (lt / 2) - vsd.x();
         // lam = (w.x E.y - w.y E.x) / denom in (0, lam_max], and z = vz + lam dz in [z0, z1).
         double llo = 0, lhi = lam_max;
         if (std::abs(dz) >= kTiny) {
-          double za = (z0 - ray.vz) / dz, zb = (z1 - ray.vz) / dz;
+          double za = (z0 - vsz) / dz, zb = (z1 - vsz) / dz;
           if (za > zb) std::swap(za, zb);
           llo = std::max(llo, za), lhi = std::min(lhi, zb);
         }
@@ -493,7 +524,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
         for (int i = i0; i <= i1; ++i) {
           if (!(*need)[i][ai]) continue;
           double a, z;
-          if (!crossLeaf(ray.v, r, ray.vz, dz, lam_max, P[i][ai], E[i][ai], a, z) || a < 0.05 || a >= Lmax || z < z0 ||
+          if (!crossLeaf(vsd, r, vsz, dz, lam_max, P[i][ai], E[i][ai], a, z) || a < 0.05 || a >= Lmax || z < z0 ||
               z >= z1)
             continue;
           const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
@@ -828,7 +859,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
             for (std::size_t ri = 0; ri < rays.size() && n <= most; ++ri) {
               const Ray& ray = rays[ri];
               double a, z;
-              if (!crossLeaf(ray.v, ray.q - ray.v, ray.vz, ray.qz - ray.vz, 1 - 0.06 / ray.len, P, e, a, z) || a < 0.05 ||
+              if (!crossLeaf(vsd, ray.q - vsd, vsz, ray.qz - vsz, 1 - 0.06 / ray.len, P, e, a, z) || a < 0.05 ||
                   a >= L || z < z0 || z >= z1)
                 continue;
               char& f = crossed[static_cast<std::size_t>(std::min(nl - 1, static_cast<int>(a / abin))) * nz +

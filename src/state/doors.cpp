@@ -121,7 +121,8 @@ bool mayBeOwnLeaf(const segmentation::Points& pts, const segmentation::WallPlane
 
 DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentation::WallPlane>& walls, double floor_z,
                     double top_z, bool ceiling_known, const Eigen::Vector3f& viewpoint, const Eigen::Matrix3d& to_input,
-                    bool organized, const Parameters& p, const segmentation::ViewTop* view_in) {
+                    bool organized, const Parameters& p, const segmentation::ViewTop* view_in,
+                    const std::vector<std::vector<recognition::Doorway>>* given) {
   DoorStage out;
   auto toInput = [&](const Eigen::Vector3d& v) -> Eigen::Vector3d { return to_input * v; };
   auto onFloor = [&](const Eigen::Vector2d& xy) { return Eigen::Vector3d(xy.x(), xy.y(), floor_z); };
@@ -135,9 +136,13 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
   const segmentation::ViewTop own =
       organized && !view_in ? segmentation::viewTop(pts, viewpoint) : segmentation::ViewTop{};
   const segmentation::ViewTop* view = !organized ? nullptr : view_in ? view_in : &own;
-  parallelFor(walls.size(), [&](std::size_t wi) {
-    doorways[wi] = recognition::findDoorways(pts, walls[wi], floor_z, top_z, viewpoint, p, organized, view);
-  });
+  if (given && given->size() == walls.size()) {
+    doorways = *given;
+  } else {
+    parallelFor(walls.size(), [&](std::size_t wi) {
+      doorways[wi] = recognition::findDoorways(pts, walls[wi], floor_z, top_z, viewpoint, p, organized, view);
+    });
+  }
   struct Candidate {
     std::size_t wall;
     recognition::Doorway doorway;

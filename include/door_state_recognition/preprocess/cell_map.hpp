@@ -9,13 +9,14 @@
 #include <cstdint>
 #include <vector>
 
+#include "door_state_recognition/util/floor.hpp"
+
 namespace dsr {
 namespace preprocess {
 
 // Integer cell coordinates of a point for cells of edge 1/inv.
 inline Eigen::Vector3i cellOf(const Eigen::Vector3f& p, double inv) {
-  return Eigen::Vector3i(static_cast<int>(std::floor(p.x() * inv)), static_cast<int>(std::floor(p.y() * inv)),
-                         static_cast<int>(std::floor(p.z() * inv)));
+  return Eigen::Vector3i(util::floorToInt(p.x() * inv), util::floorToInt(p.y() * inv), util::floorToInt(p.z() * inv));
 }
 
 // 21 bits an axis. Coordinates beyond +-2^20 cells wrap: two far-apart cells

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <optional>
+#include <functional>
 #include <vector>
 
 #include "door_state_recognition/pipeline/parameters.hpp"
@@ -79,9 +80,14 @@ ViewTop viewTop(const Points& points, const Eigen::Vector3f& viewpoint);
 // the segment spans wall_height_ratio of the room height and reaches near the
 // ceiling (when seen) or the top of the view (`view`, when given).
 // `height_top` is the ceiling or, without one, the top of the vertical structure.
+// `on_wall`, when given, is called with each wall as soon as it is taken
+// (its index in the result, in order), while the search goes on: from
+// whichever thread runs the wall rules, inside findWalls's OpenMP region, so
+// that it may start OpenMP tasks, which findWalls waits for before it returns.
+using OnWall = std::function<void(std::size_t index, const WallPlane& wall)>;
 std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, double floor_z, double height_top,
                                  bool ceiling_known, const Eigen::Vector2d& viewpoint, const Parameters& p,
-                                 const ViewTop* view = nullptr);
+                                 const ViewTop* view = nullptr, const OnWall& on_wall = nullptr);
 
 // The wall rules of findWalls for one plane's inliers: split along the wall
 // at gaps wider than wall_gap (unless, seen from `viewpoint`, the gap shows

@@ -10,6 +10,7 @@
 
 #include "door_state_recognition/pipeline/parameters.hpp"
 #include "door_state_recognition/pipeline/pipeline.hpp"
+#include "door_state_recognition/recognition/recognition.hpp"
 #include "door_state_recognition/reconstruction/reconstruction.hpp"
 #include "door_state_recognition/segmentation/segmentation.hpp"
 
@@ -29,9 +30,13 @@ struct DoorStage {
 // camera frame, where no return in range means free space; its extent is
 // `view` when the caller has made it (else made here). Doorways and
 // leaves are searched over the cores; decisions follow in wall order.
+// `doorways`, when given, holds each wall's doorways as
+// recognition::findDoorways finds them with these arguments (the caller
+// sought them already); else they are sought here.
 DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentation::WallPlane>& walls, double floor_z,
                     double top_z, bool ceiling_known, const Eigen::Vector3f& viewpoint, const Eigen::Matrix3d& to_input,
-                    bool organized, const Parameters& p, const segmentation::ViewTop* view = nullptr);
+                    bool organized, const Parameters& p, const segmentation::ViewTop* view = nullptr,
+                    const std::vector<std::vector<recognition::Doorway>>* doorways = nullptr);
 
 }  // namespace state
 }  // namespace dsr

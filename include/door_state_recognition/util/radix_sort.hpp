@@ -13,24 +13,27 @@
 namespace dsr {
 namespace util {
 
-// Stable: items with equal key(item) keep their order.
+// Stable: items with equal key(item) keep their order. One pass counts
+// every byte of every key; each byte that varies then takes one pass that
+// moves the items (keys worked out again: cheaper than moving them too).
 template <class T, class Key>
 void radixSortBy(std::vector<T>& v, const Key& key) {
   const std::size_t n = v.size();
   if (n < 2) return;
+  std::array<std::array<std::size_t, 257>, 8> at{};
   std::uint64_t all_or = 0, all_and = ~std::uint64_t(0);
   for (const T& x : v) {
     const std::uint64_t k = key(x);
     all_or |= k, all_and &= k;
+    for (int byte = 0; byte < 8; ++byte) ++at[byte][((k >> (8 * byte)) & 0xFF) + 1];
   }
   std::vector<T> tmp(n);
   for (int byte = 0; byte < 8; ++byte) {
     const int shift = 8 * byte;
     if ((((all_or ^ all_and) >> shift) & 0xFF) == 0) continue;  // every key has the same byte here
-    std::array<std::size_t, 257> at{};
-    for (const T& x : v) ++at[((key(x) >> shift) & 0xFF) + 1];
-    for (int b = 0; b < 256; ++b) at[b + 1] += at[b];
-    for (const T& x : v) tmp[at[(key(x) >> shift) & 0xFF]++] = x;
+    std::array<std::size_t, 257>& pos = at[byte];
+    for (int b = 0; b < 256; ++b) pos[b + 1] += pos[b];
+    for (const T& x : v) tmp[pos[(key(x) >> shift) & 0xFF]++] = x;
     v.swap(tmp);
   }
 }
