@@ -417,17 +417,23 @@ TEST(DoorState, ALeafSwungTowardsTheSensorIsSoughtDeeperThanAThinMeasuredWall) {
   EXPECT_LT(m->hinge_error_m, 0.1);
 }
 
+// Truth door `door` of random room `seed` scanned with `rays` rays is closed
+// and found alone with its state right.
+void expectClosedDoorFound(std::uint64_t seed, std::size_t rays, int door) {
+  const Scored s = runScene(sim::randomRoom(seed), seed, "tls", rays);
+  SCOPED_TRACE(::testing::Message() << "seed=" << seed << " (" << rays << " rays) " << describe(s) << trace(s));
+  ASSERT_GT(static_cast<int>(s.truth["doors"].size()), door);
+  ASSERT_EQ(s.truth["doors"][door]["state"], "closed");
+  expectFoundAlone(s, door);
+}
+
 TEST(DoorState, AClosedLeafTooSparseForTheWallBandStillHasItsClosedEvidence) {
   // Seed 1002 at 100k rays, door 0: closed and set back in a wall 6 m off,
   // sampled so sparsely that the points in the wall band cover too little
   // of the doorway for a closed leaf found there; the general search finds
   // it at 0 deg, and a closed leaf takes a closed leaf's evidence (here the
   // recess), wherever it was found.
-  const std::uint64_t seed = 1002;
-  const Scored s = runScene(sim::randomRoom(seed), seed, "tls", 100000);
-  SCOPED_TRACE(::testing::Message() << "seed=" << seed << " (100k rays) " << describe(s) << trace(s));
-  ASSERT_EQ(s.truth["doors"][0]["state"], "closed");
-  expectFoundAlone(s, 0);
+  expectClosedDoorFound(1002, 100000, 0);
 }
 
 TEST(DoorState, ASparseScanFindsTheHeadTrimOfAClosedDoor) {
@@ -439,13 +445,8 @@ TEST(DoorState, ASparseScanFindsTheHeadTrimOfAClosedDoor) {
   // the wall above holds them in 7-10. Where the wall above shows in at most
   // half the columns, the head needs half as many. Seed 2008, door 1: the
   // same at another wall.
-  for (const auto& [seed, door] : {std::pair<std::uint64_t, int>{1014, 0}, {2008, 1}}) {
-    const Scored s = runScene(sim::randomRoom(seed), seed, "tls", 100000);
-    SCOPED_TRACE(::testing::Message() << "seed=" << seed << " (100k rays) " << describe(s) << trace(s));
-    ASSERT_GT(static_cast<int>(s.truth["doors"].size()), door);
-    ASSERT_EQ(s.truth["doors"][door]["state"], "closed");
-    expectFoundAlone(s, door);
-  }
+  expectClosedDoorFound(1014, 100000, 0);
+  expectClosedDoorFound(2008, 100000, 1);
 }
 
 TEST(DoorState, AHeadTrimStraddlingTwoGridRowsIsFound) {
@@ -453,11 +454,7 @@ TEST(DoorState, AHeadTrimStraddlingTwoGridRowsIsFound) {
   // sides. The head's trim (7 cm high) straddles two 5 cm rows of the
   // wall's grid and fills 68 % and 63 % of their face points, short of the
   // 70 % a head needs; a row slid up by 1 cm lies within the trim.
-  const std::uint64_t seed = 1018;
-  const Scored s = runScene(sim::randomRoom(seed), seed, "tls", 1000000);
-  SCOPED_TRACE(::testing::Message() << "seed=" << seed << " (1M rays) " << describe(s) << trace(s));
-  ASSERT_EQ(s.truth["doors"][0]["state"], "closed");
-  expectFoundAlone(s, 0);
+  expectClosedDoorFound(1018, 1000000, 0);
 }
 
 TEST(DoorState, ALeafHidingTheTrimAtItsHingeIsFittedAsInAnUnpairedDoorway) {
