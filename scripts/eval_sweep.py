@@ -4,7 +4,8 @@ each, scores every report against its truth with door_state_eval, and prints
 the merged figures as JSON (plus one line per scene with --verbose).
 
   scripts/eval_sweep.py [--sensor tls|rgbd] [--scenes N] [--first-seed S]
-                        [--points N] [--up AXIS] [--jobs J] [--verbose] [--out DIR]
+                        [--points N] [--viewpoints K] [--up AXIS] [--jobs J]
+                        [--verbose] [--out DIR]
 """
 import argparse, json, os, subprocess, sys, tempfile
 from concurrent.futures import ThreadPoolExecutor
@@ -18,11 +19,14 @@ def one(args, seed, out):
     sim = [str(BIN / "door_scene_sim"), "--quiet", "--sensor", args.sensor, "--seed", str(seed),
            "--out", str(prefix), "--formats", "pcd,json"]
     if args.sensor == "tls":
-        sim += ["--points", str(args.points), "--noise", str(args.noise)]
+        sim += ["--points", str(args.points), "--noise", str(args.noise), "--viewpoints", str(args.viewpoints)]
     subprocess.run(sim, check=True)
     up = args.up or ("-y" if args.sensor == "rgbd" else "+z")
-    subprocess.run([str(BIN / "door_state_cli"), "--quiet", "--up", up, "--json", f"{prefix}.report.json",
-                    f"{prefix}.pcd"], check=True)
+    # Several scan positions: each station's own file (with its VIEWPOINT), as a survey delivers them.
+    inputs = ([f"{prefix}.station{k}.pcd" for k in range(args.viewpoints)] if args.sensor == "tls" and args.viewpoints > 1
+              else [f"{prefix}.pcd"])
+    subprocess.run([str(BIN / "door_state_cli"), "--quiet", "--up", up, "--json", f"{prefix}.report.json"] + inputs,
+                   check=True)
     res = subprocess.run([str(BIN / "door_state_eval"), "--in-view-only", f"{prefix}.json", f"{prefix}.report.json"],
                          check=True, capture_output=True, text=True)
     return seed, prefix, json.loads(res.stdout)
@@ -34,6 +38,8 @@ def main():
     ap.add_argument("--first-seed", type=int, default=1000)
     ap.add_argument("--points", type=int, default=400000)
     ap.add_argument("--noise", type=float, default=0.005)
+    ap.add_argument("--viewpoints", type=int, default=1,
+                    help="TLS scan positions; above 1 the CLI gets each station's scan as its own file")
     ap.add_argument("--up", default=None)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--verbose", action="store_true")
@@ -63,6 +69,8 @@ def main():
                                      "state_accuracy", "angle_mae_deg", "angle_mae_measured_deg",
                                      "angle_lower_bounds", "hinge_error_median_m"]}
     summary.update(sensor=args.sensor, first_seed=args.first_seed)
+    if args.sensor == "tls":
+        summary.update(points=args.points, viewpoints=args.viewpoints)
     print(json.dumps(summary, indent=1))
 
 if __name__ == "__main__":

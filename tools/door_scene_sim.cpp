@@ -33,7 +33,9 @@ options:
   --seed N               random seed (default 1)
   --sensor tls|rgbd      terrestrial laser scanner (default) or one 640x480 RGB-D frame
   --points N             TLS rays over all viewpoints (default 400000)
-  --viewpoints K         TLS scan positions (default 1)
+  --viewpoints K         TLS scan positions (default 1); with K > 1 and pcd, each
+                         position's scan is also written to PREFIX.stationI.pcd
+                         (same frame, VIEWPOINT = the position)
   --noise M              TLS range noise sigma in metres (default 0.005);
                          RGB-D: 0 switches the depth noise model off
   --dropout P            probability of a lost return (default TLS 0, RGB-D 0.02)
@@ -141,6 +143,21 @@ int main(int argc, char** argv) {
 
     if (fmt.count("pcd") && pcl::io::savePCDFileBinary(out + ".pcd", cloud.cloud) != 0)
       throw std::runtime_error("cannot write " + out + ".pcd");
+    // Several scan positions: each one's scan on its own too, in the same
+    // frame, its position in the PCD's VIEWPOINT (as a survey's registered
+    // stations come), for door_state_cli's multi-station input.
+    if (fmt.count("pcd") && cloud.viewpoints_world.size() > 1) {
+      const Eigen::Isometry3d world_to_cloud = cloud.sensor_to_world.inverse();
+      for (std::size_t k = 0; k < cloud.viewpoints_world.size(); ++k) {
+        pcl::PointCloud<pcl::PointXYZL> part;
+        for (std::size_t i = 0; i < cloud.cloud.size(); ++i)
+          if (cloud.station[i] == static_cast<int>(k)) part.push_back(cloud.cloud[i]);
+        const Eigen::Vector3d o = world_to_cloud * cloud.viewpoints_world[k];
+        part.sensor_origin_ = Eigen::Vector4f(static_cast<float>(o.x()), static_cast<float>(o.y()), static_cast<float>(o.z()), 0);
+        const std::string path = out + ".station" + std::to_string(k) + ".pcd";
+        if (part.empty() || pcl::io::savePCDFileBinary(path, part) != 0) throw std::runtime_error("cannot write " + path);
+      }
+    }
     if (fmt.count("ply") && pcl::io::savePLYFileBinary(out + ".ply", cloud.cloud) != 0)
       throw std::runtime_error("cannot write " + out + ".ply");
     if (fmt.count("json")) {

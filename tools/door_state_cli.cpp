@@ -6,6 +6,7 @@
 #include <fstream>
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include "cli_args.hpp"
 #include "door_state_recognition/io/cloud_reader.hpp"
@@ -15,13 +16,22 @@
 namespace {
 
 const char* kUsage = R"(usage: door_state_cli [--config FILE.yaml] [--up +z|-z|+y|-y|+x|-x|auto]
-                      [--json OUT.json] [--reconstruction OUT.ply] [--quiet] [--verbose] INPUT
+                      [--json OUT.json] [--reconstruction OUT.ply] [--quiet] [--verbose]
+                      INPUT [INPUT...]
 
 Finds the walls and doors in a point cloud and tells every door's state
 (closed, semi_open, open) and opening angle. INPUT is a PCD (ascii, binary,
 binary_compressed) or PLY (ascii, binary) file with at least x, y, z, taken
 to be seen from its origin. The report (JSON, input frame, metres and
 degrees) goes to stdout, or to --json.
+
+Several INPUTs are the stations of one survey: scans from several scanner
+positions, registered into one frame, each a PCD whose VIEWPOINT header says
+where its scanner stood in that frame (a PLY has none: its station is taken
+at the origin). Each station is run alone, with rays from its own position,
+and the results merged: walls on one line joined, each door reported once,
+from the station that saw its leaf best. "input" in the report lists them
+joined by commas.
 
   --config FILE.yaml       parameters over the defaults (config/default.yaml lists them)
   --up AXIS                the cloud's up axis, or auto to estimate it (default +z;
@@ -41,7 +51,8 @@ using dsr::tools::UsageError;
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string config, up, json_out, recon_out, input;
+  std::string config, up, json_out, recon_out;
+  std::vector<std::string> inputs;
   bool quiet = false, verbose = false;
   try {
     for (int i = 1; i < argc; ++i) {
@@ -57,10 +68,9 @@ int main(int argc, char** argv) {
       else if (a == "--quiet") quiet = true;
       else if (a == "--verbose") verbose = true;
       else if (!a.empty() && a[0] == '-' && a != "-") throw UsageError("unknown option '" + a + "'");
-      else if (input.empty()) input = a;
-      else throw UsageError("only one INPUT is taken, got '" + input + "' and '" + a + "'");
+      else inputs.push_back(a);
     }
-    if (input.empty()) throw UsageError("INPUT is missing");
+    if (inputs.empty()) throw UsageError("INPUT is missing");
   } catch (const UsageError& e) {
     std::cerr << "door_state_cli: " << e.what() << "\n\n" << kUsage;
     return 2;
@@ -71,10 +81,30 @@ int main(int argc, char** argv) {
     if (!up.empty()) params.up_axis = up;
     const dsr::Pipeline pipeline(params);  // validates
     const auto t0 = std::chrono::steady_clock::now();
-    const pcl::PointCloud<pcl::PointXYZ> cloud = dsr::io::readCloud(input);
+    std::vector<pcl::PointCloud<pcl::PointXYZ>> clouds;
+    for (const std::string& input : inputs) {
+      const auto t_read = std::chrono::steady_clock::now();
+      clouds.push_back(dsr::io::readCloud(input));
+      if (!quiet)
+        std::cerr << "door_state_cli: read " << clouds.back().size() << " points from " << input << " in "
+                  << std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_read).count() << " ms\n";
+    }
     const double read_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    if (!quiet) std::cerr << "door_state_cli: read " << cloud.size() << " points from " << input << " in " << read_ms << " ms\n";
-    const dsr::PipelineResult result = pipeline.run(cloud, !recon_out.empty());
+    std::string input = inputs[0];
+    dsr::PipelineResult result;
+    if (inputs.size() == 1) {
+      result = pipeline.run(clouds[0], !recon_out.empty());
+    } else {
+      std::vector<dsr::Station> stations;
+      for (std::size_t k = 0; k < clouds.size(); ++k) {
+        const Eigen::Vector3d vp = clouds[k].sensor_origin_.head<3>().cast<double>();
+        stations.push_back({&clouds[k], vp});
+        if (k > 0) input += "," + inputs[k];
+        if (!quiet)
+          std::cerr << "door_state_cli: station " << k << " at (" << vp.x() << ", " << vp.y() << ", " << vp.z() << ")\n";
+      }
+      result = pipeline.runStations(stations, !recon_out.empty());
+    }
     nlohmann::json report = dsr::io::reportJson(result, input);
     report["timing_ms"]["read"] = read_ms;
     if (json_out.empty()) {

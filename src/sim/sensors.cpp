@@ -151,8 +151,12 @@ SimulatedCloud scanTls(const Scene& scene, const TlsOptions& o) {
     valid[idx] = 1;
   }
   out.cloud.reserve(slots.size());
+  out.station.reserve(slots.size());
   for (std::size_t i = 0; i < slots.size(); ++i)
-    if (valid[i]) out.cloud.push_back(slots[i]);
+    if (valid[i]) {
+      out.cloud.push_back(slots[i]);
+      out.station.push_back(static_cast<int>(i / per));
+    }
   out.cloud.is_dense = true;
   return out;
 }

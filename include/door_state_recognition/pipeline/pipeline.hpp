@@ -78,6 +78,13 @@ struct PipelineResult {
   pcl::PointCloud<pcl::PointXYZL> reconstruction;
 };
 
+// One scan position of a survey: its scan, in the frame every station of the
+// survey shares, and where the scanner stood in that frame.
+struct Station {
+  const pcl::PointCloud<pcl::PointXYZ>* cloud = nullptr;
+  Eigen::Vector3d viewpoint = Eigen::Vector3d::Zero();
+};
+
 class Pipeline {
  public:
   // Throws std::invalid_argument when a parameter is out of range.
@@ -92,6 +99,16 @@ class Pipeline {
   // been moved into a fixed frame): rays from it tell free space.
   PipelineResult run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool with_reconstruction = true,
                      const Eigen::Vector3d& viewpoint = Eigen::Vector3d::Zero()) const;
+
+  // A survey of several stations (src/pipeline/stations.cpp): each station's
+  // scan is run alone, its rays from its own viewpoint, and the results are
+  // merged: walls on one line joined, a door seen from several stations
+  // reported once, from the station that measured its leaf best (a measured
+  // angle before a lower bound, then the higher confidence). Swing is told
+  // from the first station. One station is run(). Throws
+  // std::invalid_argument for no station, a null cloud, a non-finite
+  // viewpoint, or more than max_points in all.
+  PipelineResult runStations(const std::vector<Station>& stations, bool with_reconstruction = true) const;
 
  private:
   Parameters params_;

@@ -46,6 +46,7 @@ struct SimulatedCloud {
   std::string sensor;    // "tls" | "rgbd"
   std::string frame_id;  // "tls_scanner" | "camera_depth_optical_frame"
   std::vector<Eigen::Vector3d> viewpoints_world;
+  std::vector<int> station;  // TLS: index into viewpoints_world of the scan position each point was seen from
   RgbdOptions rgbd;      // intrinsics used (RGB-D only)
 };
 

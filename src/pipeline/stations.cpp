@@ -1,0 +1,234 @@
+// A survey of several scan positions (stations) in one frame: each station's
+// scan runs through the pipeline alone, with its own viewpoint (a ray is only
+// known between a point and the station that saw it), and the results are
+// merged here: walls on one line joined, a door seen from several stations
+// reported once, from the station whose scan measured its leaf best.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "door_state_recognition/pipeline/pipeline.hpp"
+#include "door_state_recognition/preprocess/preprocess.hpp"
+#include "door_state_recognition/reconstruction/reconstruction.hpp"
+
+namespace dsr {
+namespace {
+
+// Walls of two stations are one wall when their lines agree this well.
+constexpr double kWallParallelCos = 0.9986;  // 3 deg
+constexpr double kWallOffset = 0.08;         // m, between the lines
+constexpr double kWallGap = 0.3;             // m, between their extents along the line
+// Doors of two stations are one door when their doorways' centres are this close.
+constexpr double kSameDoor = 0.45;  // m
+// ... or when their doorways on one wall overlap by this share of the narrower.
+constexpr double kSameDoorOverlap = 0.25;
+
+struct Line2 {  // a wall in the levelled frame
+  Eigen::Vector2d point, dir;
+  double s0, s1;
+};
+
+Line2 levelledLine(const WallResult& w, const Eigen::Matrix3d& R) {
+  const Eigen::Vector3d p = R * w.line_point, d = R * w.line_direction;
+  Line2 l{p.head<2>(), Eigen::Vector2d(d.x(), d.y()).normalized(), 0, w.length};
+  return l;
+}
+
+// Rebuilds `into`'s corner box to hold both walls' boxes, along its line.
+void unionCorners(WallResult& into, const WallResult& other, const Eigen::Matrix3d& R) {
+  const Eigen::Matrix3d Rt = R.transpose();
+  const Eigen::Vector3d d3 = R * into.line_direction;
+  const Eigen::Vector3d e1 = Eigen::Vector3d(d3.x(), d3.y(), 0).normalized(), e3 = Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d e2 = e3.cross(e1);
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = Eigen::Vector3d::Constant(-1e300);
+  for (const WallResult* w : {static_cast<const WallResult*>(&into), &other})
+    for (const Eigen::Vector3d& c : w->corners) {
+      const Eigen::Vector3d p = R * c, q(p.dot(e1), p.dot(e2), p.dot(e3));
+      lo = lo.cwiseMin(q);
+      hi = hi.cwiseMax(q);
+    }
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d q((k & 1) ? hi.x() : lo.x(), (k & 2) ? hi.y() : lo.y(), (k & 4) ? hi.z() : lo.z());
+    into.corners[k] = Rt * (q.x() * e1 + q.y() * e2 + q.z() * e3);
+  }
+}
+
+// Which of two reports of one door to keep: a leaf measured over one whose
+// angle is only bounded; then the surer; of two bounds the larger (each is a
+// true lower bound, so the larger is the tighter).
+bool better(const DoorResult& a, const DoorResult& b) {
+  if (a.angle_is_lower_bound != b.angle_is_lower_bound) return !a.angle_is_lower_bound;
+  if (a.angle_is_lower_bound) return a.opening_angle_deg > b.opening_angle_deg;
+  return a.confidence > b.confidence;
+}
+
+}  // namespace
+
+PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool with_reconstruction) const {
+  if (stations.empty()) throw std::invalid_argument("no station given");
+  std::size_t total_points = 0;
+  for (const Station& st : stations) {
+    if (!st.cloud) throw std::invalid_argument("station without a cloud");
+    if (!st.viewpoint.allFinite()) throw std::invalid_argument("station viewpoint is not finite");
+    total_points += st.cloud->size();
+  }
+  if (total_points > static_cast<std::size_t>(params_.max_points))
+    throw std::invalid_argument("stations of " + std::to_string(total_points) + " points in all exceed max_points (" +
+                                std::to_string(params_.max_points) + ")");
+  if (stations.size() == 1) return run(*stations[0].cloud, with_reconstruction, stations[0].viewpoint);
+
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<PipelineResult> runs;
+  runs.reserve(stations.size());
+  for (const Station& st : stations) runs.push_back(run(*st.cloud, false, st.viewpoint));
+
+  // The frame of the station that kept the most points after thinning.
+  std::size_t primary = 0;
+  for (std::size_t k = 1; k < runs.size(); ++k)
+    if (runs[k].points_used > runs[primary].points_used) primary = k;
+  PipelineResult res;
+  res.up = runs[primary].up;
+  res.floor = runs[primary].floor;
+  res.ceiling = runs[primary].ceiling;
+  const Eigen::Matrix3d R = preprocess::levellingRotation(res.up);
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    res.points_in += runs[k].points_in;
+    res.points_used += runs[k].points_used;
+    for (const auto& w : runs[k].warnings) res.warnings.push_back("station " + std::to_string(k) + ": " + w);
+    for (const auto& t : runs[k].trace) res.trace.push_back("station " + std::to_string(k) + ": " + t);
+    for (const auto& [stage, ms] : runs[k].timing_ms) {
+      if (stage == "total") continue;
+      auto it = std::find_if(res.timing_ms.begin(), res.timing_ms.end(), [&](const auto& kv) { return kv.first == stage; });
+      if (it == res.timing_ms.end()) res.timing_ms.emplace_back(stage, ms);
+      else it->second += ms;
+    }
+  }
+
+  // Walls: the primary station's first, then each other station's joined to
+  // a wall on the same line or added.
+  std::vector<std::vector<int>> wall_map(runs.size());
+  std::vector<Line2> lines;
+  auto addWalls = [&](std::size_t k) {
+    wall_map[k].assign(runs[k].walls.size(), -1);
+    for (std::size_t wi = 0; wi < runs[k].walls.size(); ++wi) {
+      const WallResult& w = runs[k].walls[wi];
+      const Line2 l = levelledLine(w, R);
+      int joined = -1;
+      for (std::size_t m = 0; m < lines.size() && joined < 0; ++m) {
+        const Line2& L = lines[m];
+        const double c = L.dir.dot(l.dir);
+        if (std::abs(c) < kWallParallelCos) continue;
+        const Eigen::Vector2d n(-L.dir.y(), L.dir.x());
+        const Eigen::Vector2d a = l.point, b = l.point + l.dir * l.s1;
+        if (std::abs((0.5 * (a + b) - L.point).dot(n)) > kWallOffset) continue;
+        const double sa = (a - L.point).dot(L.dir), sb = (b - L.point).dot(L.dir);
+        const double lo = std::min(sa, sb), hi = std::max(sa, sb);
+        if (lo > L.s1 + kWallGap || hi < L.s0 - kWallGap) continue;
+        joined = static_cast<int>(m);
+        Line2& M = lines[m];
+        WallResult& into = res.walls[m];
+        const double s0 = std::min(M.s0, lo), s1 = std::max(M.s1, hi);
+        unionCorners(into, w, R);
+        const Eigen::Vector3d p0 = R * into.line_point;
+        const Eigen::Vector2d start = M.point + M.dir * s0;
+        into.line_point = R.transpose() * Eigen::Vector3d(start.x(), start.y(), p0.z());
+        M.point = start;
+        M.s0 = 0;
+        M.s1 = s1 - s0;
+        into.length = M.s1;
+        into.height = std::max(into.height, w.height);
+        into.points += w.points;
+      }
+      if (joined < 0) {
+        joined = static_cast<int>(res.walls.size());
+        res.walls.push_back(w);
+        res.walls.back().id = joined;
+        lines.push_back(l);
+      }
+      wall_map[k][wi] = joined;
+    }
+  };
+  addWalls(primary);
+  for (std::size_t k = 0; k < runs.size(); ++k)
+    if (k != primary) addWalls(k);
+
+  // Doors: one per doorway, the best report of it.
+  for (std::size_t k = 0; k < runs.size(); ++k)
+    for (DoorResult d : runs[k].doors) {
+      if (d.wall_id) d.wall_id = wall_map[k][*d.wall_id];
+      // Swing is told from the first station, as for a single scan.
+      if (d.swing != Swing::Unknown)
+        d.swing = (stations[0].viewpoint - d.opening_center).dot(d.wall_normal) > 0 ? Swing::TowardViewer
+                                                                                    : Swing::AwayFromViewer;
+      // One doorway: centres close, or on one wall with the doorways
+      // overlapping (a leaf's shadow beside its doorway, taken from another
+      // station for a doorway of its own, overlaps the true one).
+      auto span = [&](const DoorResult& x) {
+        const Line2& L = lines[*x.wall_id];
+        const double c = ((R * x.opening_center).head<2>() - L.point).dot(L.dir);
+        return std::make_pair(c - x.width / 2, c + x.width / 2);
+      };
+      auto same = std::find_if(res.doors.begin(), res.doors.end(), [&](const DoorResult& o) {
+        if ((o.opening_center - d.opening_center).norm() < kSameDoor) return true;
+        if (!o.wall_id || !d.wall_id || *o.wall_id != *d.wall_id) return false;
+        const auto [a0, a1] = span(o);
+        const auto [b0, b1] = span(d);
+        return std::min(a1, b1) - std::max(a0, b0) >= kSameDoorOverlap * std::min(a1 - a0, b1 - b0);
+      });
+      if (same == res.doors.end()) res.doors.push_back(d);
+      else if (better(d, *same)) *same = d;
+    }
+  for (std::size_t i = 0; i < res.doors.size(); ++i) res.doors[i].id = static_cast<int>(i);
+
+  // Other segments: each once (a box seen from two stations alike).
+  for (const PipelineResult& r : runs)
+    for (const SegmentResult& s : r.others) {
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      for (const auto& q : s.corners) c += q / 8;
+      const bool seen = std::any_of(res.others.begin(), res.others.end(), [&](const SegmentResult& o) {
+        Eigen::Vector3d oc = Eigen::Vector3d::Zero();
+        for (const auto& q : o.corners) oc += q / 8;
+        return (oc - c).norm() < 0.2 && std::abs(o.height - s.height) < 0.2;
+      });
+      if (!seen) {
+        res.others.push_back(s);
+        res.others.back().id = static_cast<int>(res.others.size() - 1);
+      }
+    }
+
+  if (with_reconstruction) {
+    std::vector<reconstruction::WallPatch> patches;
+    for (std::size_t m = 0; m < res.walls.size(); ++m) {
+      const double z = (R * res.walls[m].line_point).z();
+      patches.push_back({lines[m].point, lines[m].dir, lines[m].s0, lines[m].s1, z, z + res.walls[m].height});
+    }
+    std::vector<reconstruction::Opening> openings;
+    for (const DoorResult& d : res.doors) {
+      if (!d.wall_id) continue;
+      const Line2& L = lines[*d.wall_id];
+      const Eigen::Vector3d c = R * d.opening_center, h = R * d.leaf_corners[0], l = R * d.leaf_corners[1],
+                            top = R * d.leaf_corners[2];
+      const double s = (c.head<2>() - L.point).dot(L.dir);
+      const Eigen::Vector2d leaf = (l - h).head<2>();
+      const double len = leaf.norm();
+      if (len <= 0) continue;
+      openings.push_back({static_cast<int>(*d.wall_id), s - d.width / 2, s + d.width / 2, c.z() + d.height,
+                          h.head<2>(), leaf / len, len, h.z(), top.z()});
+    }
+    res.reconstruction = reconstruction::reconstruct(patches, openings, params_.reconstruction_spacing);
+    const Eigen::Matrix3f Rt = R.transpose().cast<float>();
+    for (auto& q : res.reconstruction.points) {
+      const Eigen::Vector3f v = Rt * Eigen::Vector3f(q.x, q.y, q.z);
+      q.x = v.x();
+      q.y = v.y();
+      q.z = v.z();
+    }
+  }
+  res.timing_ms.emplace_back("total",
+                             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  return res;
+}
+
+}  // namespace dsr
