@@ -4,7 +4,7 @@ each, scores every report against its truth with door_state_eval, and prints
 the merged figures as JSON (plus one line per scene with --verbose).
 
   scripts/eval_sweep.py [--sensor tls|rgbd] [--scenes N] [--first-seed S]
-                        [--points N] [--viewpoints K] [--up AXIS] [--jobs J]
+                        [--points N] [--viewpoints K] [--up AXIS] [--config FILE] [--jobs J]
                         [--verbose] [--out DIR]
 """
 import argparse, json, os, subprocess, sys, tempfile
@@ -25,7 +25,8 @@ def one(args, seed, out):
     # Several scan positions: each station's own file (with its VIEWPOINT), as a survey delivers them.
     inputs = ([f"{prefix}.station{k}.pcd" for k in range(args.viewpoints)] if args.sensor == "tls" and args.viewpoints > 1
               else [f"{prefix}.pcd"])
-    subprocess.run([str(BIN / "door_state_cli"), "--quiet", "--up", up, "--json", f"{prefix}.report.json"] + inputs,
+    config = ["--config", args.config] if args.config else []
+    subprocess.run([str(BIN / "door_state_cli"), "--quiet", "--up", up, "--json", f"{prefix}.report.json"] + config + inputs,
                    check=True)
     res = subprocess.run([str(BIN / "door_state_eval"), "--in-view-only", f"{prefix}.json", f"{prefix}.report.json"],
                          check=True, capture_output=True, text=True)
@@ -41,6 +42,7 @@ def main():
     ap.add_argument("--viewpoints", type=int, default=1,
                     help="TLS scan positions; above 1 the CLI gets each station's scan as its own file")
     ap.add_argument("--up", default=None)
+    ap.add_argument("--config", default=None, help="parameters YAML passed to door_state_cli")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--verbose", action="store_true")
     ap.add_argument("--out", default=None)

@@ -66,7 +66,7 @@ TEST(Tools, HelpExitsZeroAndWrongArgumentsExitTwo) {
   EXPECT_EQ(run("door_scene_sim --out /tmp/x --angle 270").code, 2);          // out of range
   EXPECT_EQ(run("door_state_eval only_one.json").code, 2);
   EXPECT_EQ(run("door_state_cli").code, 2);                                   // no INPUT
-  EXPECT_EQ(run("door_state_cli a.pcd b.pcd").code, 2);                       // two INPUTs
+  EXPECT_EQ(run("door_state_cli a.pcd b.pcd").code, 2);                       // two stations, neither there
   EXPECT_EQ(run("door_state_cli --up sideways x.pcd").code, 2);               // bad axis
   EXPECT_EQ(run("door_state_eval /nonexistent/a.json /nonexistent/b.json").code, 2);
 }
@@ -160,5 +160,39 @@ TEST(Tools, CliReportHasTheDocumentedShape) {
   }
   EXPECT_TRUE(j["timing_ms"].contains("total"));
   EXPECT_GT(fs::file_size(dir / "rec.ply"), 1000u);
+  fs::remove_all(dir);
+}
+
+TEST(Tools, CliTakesTheStationsOfASurveyEachFromItsViewpoint) {
+  // door_scene_sim --viewpoints 2 writes each station's scan with its
+  // VIEWPOINT; door_state_cli given both reports one survey. A station
+  // missing, or a VIEWPOINT out of range, is exit 2 with one line.
+  const fs::path dir = tempDir("stations");
+  const std::string prefix = (dir / "s").string();
+  ASSERT_EQ(run("door_scene_sim --quiet --seed 1016 --viewpoints 2 --points 400000 --out " + prefix).code, 0);
+  const std::string s0 = prefix + ".station0.pcd", s1 = prefix + ".station1.pcd";
+  ASSERT_TRUE(fs::exists(s0) && fs::exists(s1));
+  EXPECT_EQ(slurp(s1).find("VIEWPOINT 0 0 0 1"), std::string::npos);  // station 1 stood elsewhere
+  const Result r = run("door_state_cli --quiet " + s0 + " " + s1);
+  ASSERT_EQ(r.code, 0);
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["input"].get<std::string>(), s0 + "," + s1);
+  const Result a = run("door_state_cli --quiet " + s0), b = run("door_state_cli --quiet " + s1);
+  ASSERT_EQ(a.code, 0);
+  ASSERT_EQ(b.code, 0);
+  EXPECT_EQ(j["points_in"].get<long>(), nlohmann::json::parse(a.out)["points_in"].get<long>() +
+                                            nlohmann::json::parse(b.out)["points_in"].get<long>());
+  EXPECT_FALSE(j["doors"].empty());
+  const Result missing = run("door_state_cli " + s0 + " " + (dir / "nope.pcd").string(), true);
+  EXPECT_EQ(missing.code, 2);
+  EXPECT_EQ(std::count(missing.out.begin(), missing.out.end(), '\n'), 1) << missing.out;
+  std::string far = slurp(s1);
+  const std::size_t at = far.find("VIEWPOINT");
+  ASSERT_NE(at, std::string::npos);
+  far.replace(at, far.find('\n', at) - at, "VIEWPOINT 1e30 0 0 1 0 0 0");
+  std::ofstream(dir / "far.pcd", std::ios::binary) << far;
+  const Result bad = run("door_state_cli " + s0 + " " + (dir / "far.pcd").string(), true);
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.out.find("VIEWPOINT"), std::string::npos) << bad.out;
   fs::remove_all(dir);
 }

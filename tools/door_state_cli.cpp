@@ -22,7 +22,7 @@ const char* kUsage = R"(usage: door_state_cli [--config FILE.yaml] [--up +z|-z|+
 Finds the walls and doors in a point cloud and tells every door's state
 (closed, semi_open, open) and opening angle. INPUT is a PCD (ascii, binary,
 binary_compressed) or PLY (ascii, binary) file with at least x, y, z, taken
-to be seen from its origin. The report (JSON, input frame, metres and
+to be seen from its VIEWPOINT (PCD header; the origin if none is given). The report (JSON, input frame, metres and
 degrees) goes to stdout, or to --json.
 
 Several INPUTs are the stations of one survey: scans from several scanner
@@ -81,30 +81,33 @@ int main(int argc, char** argv) {
     if (!up.empty()) params.up_axis = up;
     const dsr::Pipeline pipeline(params);  // validates
     const auto t0 = std::chrono::steady_clock::now();
+    // Every input read before anything is said: a bad one is one line on stderr.
     std::vector<pcl::PointCloud<pcl::PointXYZ>> clouds;
+    std::vector<double> read_each_ms;
     for (const std::string& input : inputs) {
       const auto t_read = std::chrono::steady_clock::now();
       clouds.push_back(dsr::io::readCloud(input));
-      if (!quiet)
-        std::cerr << "door_state_cli: read " << clouds.back().size() << " points from " << input << " in "
-                  << std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_read).count() << " ms\n";
+      read_each_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_read).count());
     }
     const double read_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    // Each INPUT seen from its VIEWPOINT (PCD; the origin where none is given).
     std::string input = inputs[0];
-    dsr::PipelineResult result;
-    if (inputs.size() == 1) {
-      result = pipeline.run(clouds[0], !recon_out.empty());
-    } else {
-      std::vector<dsr::Station> stations;
-      for (std::size_t k = 0; k < clouds.size(); ++k) {
-        const Eigen::Vector3d vp = clouds[k].sensor_origin_.head<3>().cast<double>();
-        stations.push_back({&clouds[k], vp});
-        if (k > 0) input += "," + inputs[k];
-        if (!quiet)
-          std::cerr << "door_state_cli: station " << k << " at (" << vp.x() << ", " << vp.y() << ", " << vp.z() << ")\n";
-      }
-      result = pipeline.runStations(stations, !recon_out.empty());
+    std::vector<dsr::Station> stations;
+    for (std::size_t k = 0; k < clouds.size(); ++k) {
+      const Eigen::Vector3d vp = clouds[k].sensor_origin_.head<3>().cast<double>();
+      if (!vp.allFinite() || vp.cwiseAbs().maxCoeff() > params.max_abs_coordinate)
+        throw dsr::io::CloudReadError(inputs[k] + ": VIEWPOINT lies beyond max_abs_coordinate or is not finite");
+      stations.push_back({&clouds[k], vp});
+      if (k > 0) input += "," + inputs[k];
     }
+    for (std::size_t k = 0; k < clouds.size() && !quiet; ++k) {
+      const Eigen::Vector3d& vp = stations[k].viewpoint;
+      std::cerr << "door_state_cli: read " << clouds[k].size() << " points from " << inputs[k] << " in "
+                << read_each_ms[k] << " ms\n";
+      if (!quiet && (clouds.size() > 1 || !vp.isZero()))
+        std::cerr << "door_state_cli: station " << k << " at (" << vp.x() << ", " << vp.y() << ", " << vp.z() << ")\n";
+    }
+    const dsr::PipelineResult result = pipeline.runStations(stations, !recon_out.empty());
     nlohmann::json report = dsr::io::reportJson(result, input);
     report["timing_ms"]["read"] = read_ms;
     if (json_out.empty()) {

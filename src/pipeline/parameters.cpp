@@ -62,6 +62,7 @@ const std::map<std::string, Field>& fields() {
       {"boundary_k", field(&Parameters::boundary_k)},
       {"closed_below_deg", field(&Parameters::closed_below_deg)},
       {"open_from_deg", field(&Parameters::open_from_deg)},
+      {"unseen_leaf_min_bound_deg", field(&Parameters::unseen_leaf_min_bound_deg)},
       {"reconstruction_spacing", field(&Parameters::reconstruction_spacing)},
       {"random_seed", field(&Parameters::random_seed)},
   };
@@ -120,6 +121,7 @@ void Parameters::validate() const {
   check(boundary_k >= 4 && boundary_k <= 200, "boundary_k", "in [4, 200]");
   check(in(closed_below_deg, 0, 90) && in(open_from_deg, closed_below_deg, 180), "closed_below_deg/open_from_deg",
         "0 <= closed_below <= open_from <= 180 deg");
+  check(in(unseen_leaf_min_bound_deg, 0, 180), "unseen_leaf_min_bound_deg", "in [0, 180] deg");
   check(in(reconstruction_spacing, 0.002, 1.0), "reconstruction_spacing", "in [0.002, 1] m");
 }
 

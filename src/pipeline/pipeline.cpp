@@ -72,6 +72,8 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   if (cloud.size() > static_cast<std::size_t>(p.max_points))
     throw std::invalid_argument("cloud of " + std::to_string(cloud.size()) + " points exceeds max_points (" +
                                 std::to_string(p.max_points) + ")");
+  if (!viewpoint_in.allFinite() || viewpoint_in.cwiseAbs().maxCoeff() > p.max_abs_coordinate)
+    throw std::invalid_argument("viewpoint is not finite or lies beyond max_abs_coordinate");
   PipelineResult res;
   Stopwatch watch(&res.timing_ms);
   res.points_in = cloud.size();

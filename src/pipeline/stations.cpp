@@ -71,7 +71,8 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
   std::size_t total_points = 0;
   for (const Station& st : stations) {
     if (!st.cloud) throw std::invalid_argument("station without a cloud");
-    if (!st.viewpoint.allFinite()) throw std::invalid_argument("station viewpoint is not finite");
+    if (!st.viewpoint.allFinite() || st.viewpoint.cwiseAbs().maxCoeff() > params_.max_abs_coordinate)
+      throw std::invalid_argument("station viewpoint is not finite or lies beyond max_abs_coordinate");
     total_points += st.cloud->size();
   }
   if (total_points > static_cast<std::size_t>(params_.max_points))
@@ -80,9 +81,16 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
   if (stations.size() == 1) return run(*stations[0].cloud, with_reconstruction, stations[0].viewpoint);
 
   const auto t0 = std::chrono::steady_clock::now();
+  // Each station reports every door whose leaf it did not see but found
+  // not closed, with its lower bound: the bounds of several stations are
+  // merged (the largest holds), and only then held against
+  // unseen_leaf_min_bound_deg.
+  Parameters each = params_;
+  each.unseen_leaf_min_bound_deg = std::min(each.unseen_leaf_min_bound_deg, each.closed_below_deg);
+  const Pipeline per_station(each);
   std::vector<PipelineResult> runs;
   runs.reserve(stations.size());
-  for (const Station& st : stations) runs.push_back(run(*st.cloud, false, st.viewpoint));
+  for (const Station& st : stations) runs.push_back(per_station.run(*st.cloud, false, st.viewpoint));
 
   // The frame of the station that kept the most points after thinning.
   std::size_t primary = 0;
@@ -180,6 +188,12 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
       if (same == res.doors.end()) res.doors.push_back(d);
       else if (better(d, *same)) *same = d;
     }
+  res.doors.erase(std::remove_if(res.doors.begin(), res.doors.end(),
+                                 [&](const DoorResult& d) {
+                                   return d.angle_is_lower_bound &&
+                                          d.opening_angle_deg < params_.unseen_leaf_min_bound_deg;
+                                 }),
+                  res.doors.end());
   for (std::size_t i = 0; i < res.doors.size(); ++i) res.doors[i].id = static_cast<int>(i);
 
   // Other segments: each once (a box seen from two stations alike).

@@ -186,8 +186,10 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       const double t = thicknessOf(d);
       LeafFit leaf = cand.leaf;
       // A leaf not seen, in a doorway seen through, that free space puts at
-      // open_from_deg or more: the door is open, by at least that bound.
-      const bool open_unseen = !leaf.found && std::isfinite(leaf.free_from_deg) && leaf.free_from_deg >= p.open_from_deg &&
+      // unseen_leaf_min_bound_deg or more (default 90: the door is open, by
+      // at least that bound).
+      const bool open_unseen = !leaf.found && std::isfinite(leaf.free_from_deg) &&
+                               leaf.free_from_deg >= std::max(p.unseen_leaf_min_bound_deg, p.closed_below_deg) &&
                                leaf.free_from_deg <= 170;
       if (!leaf.found) {
         char buf[512];
@@ -198,7 +200,7 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
                       wi, d.s0, d.s1, d.casing, d.through, d.front, d.recess, d.top - floor_z, d.thickness,
                       leaf.searched ? "best" : "not searched, no evidence and wall band",
                       leaf.best_angle_deg, leaf.best_coverage, leaf.best_contradiction, leaf.candidate_points,
-                      leaf.candidate_rays, leaf.free_from_deg, open_unseen ? " | open, leaf unseen" : "");
+                      leaf.candidate_rays, leaf.free_from_deg, open_unseen ? " | leaf unseen, reported at the bound" : "");
         out.trace.push_back(buf);
         if (!open_unseen) continue;
         // The leaf where the bound puts it, the doorway's width long.

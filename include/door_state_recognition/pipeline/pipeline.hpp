@@ -45,7 +45,8 @@ struct DoorResult {
   DoorStateKind state = DoorStateKind::Closed;
   double opening_angle_deg = 0;
   // The leaf was not seen: free space puts it at opening_angle_deg or more
-  // (state open), e.g. swung behind its wall out of the sensor's sight.
+  // (at least unseen_leaf_min_bound_deg; the state is the bound's), e.g.
+  // swung behind its wall out of the sensor's sight.
   bool angle_is_lower_bound = false;
   double confidence = 0;
   Eigen::Vector3d hinge, opening_center;
@@ -93,7 +94,8 @@ class Pipeline {
 
   // Runs every stage. Non-finite points are dropped. Never throws for the
   // content of the cloud (an empty or degenerate cloud gives zero doors and a
-  // warning); throws std::invalid_argument for a cloud above max_points.
+  // warning); throws std::invalid_argument for a cloud above max_points or
+  // a viewpoint not finite or beyond max_abs_coordinate.
   // `viewpoint` is where the sensor was, in the cloud's frame (the origin for
   // a cloud in its sensor's frame; the sensor's position once the cloud has
   // been moved into a fixed frame): rays from it tell free space.
@@ -104,10 +106,12 @@ class Pipeline {
   // scan is run alone, its rays from its own viewpoint, and the results are
   // merged: walls on one line joined, a door seen from several stations
   // reported once, from the station that measured its leaf best (a measured
-  // angle before a lower bound, then the higher confidence). Swing is told
+  // angle before a lower bound, then the higher confidence; of bounds the
+  // largest, held against unseen_leaf_min_bound_deg only after the merge,
+  // so that two stations' bounds combine). Swing is told
   // from the first station. One station is run(). Throws
-  // std::invalid_argument for no station, a null cloud, a non-finite
-  // viewpoint, or more than max_points in all.
+  // std::invalid_argument for no station, a null cloud, a viewpoint not
+  // finite or beyond max_abs_coordinate, or more than max_points in all.
   PipelineResult runStations(const std::vector<Station>& stations, bool with_reconstruction = true) const;
 
  private:
