@@ -1,8 +1,9 @@
 # door_state_recognition: one-command set-up.
 #   make demo   install what is missing, build, simulate a scene, show the result
 #   make test   install what is missing, build, run every test
-# Also: make build, make bench, make clean, make sanitize (ASan+UBSan tests,
-# part of make test), make fuzz (libFuzzer targets, FUZZ_SECONDS each).
+# Also: make build, make bench, make eval (the README's accuracy sweeps),
+# make clean, make sanitize (ASan+UBSan tests, part of make test), make fuzz
+# (libFuzzer targets, FUZZ_SECONDS each).
 SHELL := /bin/bash
 REPO  := $(abspath $(dir $(lastword $(MAKEFILE_LIST))))
 # BUILD may be moved (make build BUILD=/tmp/other) to keep a second workspace
@@ -18,7 +19,7 @@ export PATH := /usr/bin:$(PATH)
 CATKIN_ARGS := -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 \
                -DPython3_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=ON
 
-.PHONY: deps build test demo bench clean rviz-shot sanitize fuzz
+.PHONY: deps build test demo bench eval clean rviz-shot sanitize fuzz
 FUZZ_SECONDS ?= 60
 
 deps:
@@ -59,6 +60,11 @@ demo: build
 
 bench: build
 	@$(REPO)/scripts/bench.sh
+
+# The accuracy sweeps of the README's table (EVAL_SWEEPS="tls-400k-1000 ..."
+# picks some); per-seed lines in $(BUILD)/eval/.
+eval: build
+	@/usr/bin/python3 $(REPO)/scripts/eval_table.py
 
 .PHONY: latency soak
 # The nodelet's latency from cloud in (stamped at publish) to DoorStateArray
