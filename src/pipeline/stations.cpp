@@ -22,8 +22,10 @@ constexpr double kWallOffset = 0.08;         // m, between the lines
 constexpr double kWallGap = 0.3;             // m, between their extents along the line
 // Doors of two stations are one door when their doorways' centres are this close.
 constexpr double kSameDoor = 0.45;  // m
-// ... or when their doorways on one wall overlap by this share of the narrower.
-constexpr double kSameDoorOverlap = 0.25;
+// ... or when, on one wall, their doorways overlap by more than this (two
+// doorways side by side at most touch; a leaf fitted from the wrong jamb,
+// or a doorway taken in its leaf's shadow, overlaps the true one).
+constexpr double kSameDoorOverlap = 0.1;  // m
 
 struct Line2 {  // a wall in the levelled frame
   Eigen::Vector2d point, dir;
@@ -172,7 +174,7 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
                                                                                     : Swing::AwayFromViewer;
       // One doorway: centres close, or on one wall with the doorways
       // overlapping (a leaf's shadow beside its doorway, taken from another
-      // station for a doorway of its own, overlaps the true one).
+      // station for a doorway of its own, overlaps the true one: 5023).
       auto span = [&](const DoorResult& x) {
         const Line2& L = lines[*x.wall_id];
         const double c = ((R * x.opening_center).head<2>() - L.point).dot(L.dir);
@@ -183,7 +185,7 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
         if (!o.wall_id || !d.wall_id || *o.wall_id != *d.wall_id) return false;
         const auto [a0, a1] = span(o);
         const auto [b0, b1] = span(d);
-        return std::min(a1, b1) - std::max(a0, b0) >= kSameDoorOverlap * std::min(a1 - a0, b1 - b0);
+        return std::min(a1, b1) - std::max(a0, b0) > kSameDoorOverlap;
       });
       if (same == res.doors.end()) res.doors.push_back(d);
       else if (better(d, *same)) *same = d;
