@@ -25,7 +25,9 @@ DEFAULT = ([f"tls-400k-{s}" for s in (1000, 2000, 3000, 4000, 5000)] +
            [f"rgbd-{s}" for s in (1000, 2000, 3000, 4000, 5000)] +
            [f"stations2-400k-{s}" for s in (1000, 2000, 3000, 4000)] +
            [f"stations3-400k-{s}" for s in (1000, 2000, 3000, 4000, 5000)] +
-           [f"stations3-400k-bound5-{s}" for s in (1000, 2000, 3000, 4000, 5000)])
+           [f"stations3-400k-bound5-{s}" for s in (1000, 2000, 3000, 4000, 5000)] +
+           [f"stations3-100k-{s}" for s in (1000, 2000, 3000)] + ["stations3-1M-1000"] +
+           [f"tls-400k-bound5-{s}" for s in (1000, 2000, 3000, 4000, 5000)])
 RAYS = {"100k": 100000, "400k": 400000, "1M": 1000000}
 
 
