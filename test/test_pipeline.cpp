@@ -773,12 +773,39 @@ TEST(Stations, ADoorOutOfOneStationsSightIsMeasuredFromAnother) {
     }
     EXPECT_EQ(on_line, 1) << "room wall at (" << o.transpose() << ") of " << length << " m";
   }
-  // Every door sits on a wall of the survey, and the rebuilt walls hold leaves.
+  // Every door sits on a wall of the survey. The walls rebuilt from the
+  // survey leave each doorway open, and every leaf point lies on a reported
+  // leaf (within 3 cm of its bottom edge's line, between hinge and latch,
+  // between its bottom and top).
   for (const auto& d : all.doors) {
     ASSERT_TRUE(d.wall_id.has_value());
     EXPECT_LT(static_cast<std::size_t>(*d.wall_id), all.walls.size());
   }
-  EXPECT_TRUE(std::any_of(all.reconstruction.begin(), all.reconstruction.end(), [](const pcl::PointXYZL& q) { return q.label == 2; }));
+  std::size_t leaf_points = 0;
+  for (const pcl::PointXYZL& q : all.reconstruction) {
+    const Eigen::Vector3d p(q.x, q.y, q.z);
+    if (q.label == 1) {
+      for (const auto& d : all.doors) {
+        const Eigen::Vector3d c = d.opening_center;
+        const bool in_doorway = (p - c).head<2>().norm() < d.width / 2 - 0.05 && p.z() > c.z() + 0.1 &&
+                                p.z() < c.z() + d.height - 0.1;
+        EXPECT_FALSE(in_doorway) << "wall point (" << p.transpose() << ") inside door " << d.id << "'s doorway";
+        if (in_doorway) break;
+      }
+      continue;
+    }
+    ++leaf_points;
+    const bool on_a_leaf = std::any_of(all.doors.begin(), all.doors.end(), [&](const DoorResult& d) {
+      const Eigen::Vector3d h = d.leaf_corners[0], l = d.leaf_corners[1];
+      const Eigen::Vector2d e = (l - h).head<2>().normalized(), r = (p - h).head<2>();
+      const double along = r.dot(e), off = std::abs(r.x() * e.y() - r.y() * e.x());
+      return off < 0.03 && along > -0.03 && along < (l - h).head<2>().norm() + 0.03 &&
+             p.z() > h.z() - 0.03 && p.z() < d.leaf_corners[2].z() + 0.03;
+    });
+    EXPECT_TRUE(on_a_leaf) << "leaf point (" << p.transpose() << ") on no reported leaf";
+    if (!on_a_leaf) break;
+  }
+  EXPECT_GT(leaf_points, 1000u);
   EXPECT_EQ(all.points_in, sv.scans[0].size() + sv.scans[1].size() + sv.scans[2].size());
 }
 

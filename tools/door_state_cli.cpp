@@ -84,9 +84,15 @@ int main(int argc, char** argv) {
     // Every input read before anything is said: a bad one is one line on stderr.
     std::vector<pcl::PointCloud<pcl::PointXYZ>> clouds;
     std::vector<double> read_each_ms;
+    std::size_t total = 0;
     for (const std::string& input : inputs) {
       const auto t_read = std::chrono::steady_clock::now();
       clouds.push_back(dsr::io::readCloud(input));
+      // Stations above max_points in all are refused before the next is read.
+      total += clouds.back().size();
+      if (total > static_cast<std::size_t>(params.max_points))
+        throw std::invalid_argument("inputs up to " + input + " hold " + std::to_string(total) +
+                                    " points, above max_points (" + std::to_string(params.max_points) + ")");
       read_each_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_read).count());
     }
     const double read_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

@@ -117,44 +117,51 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
   }
 
   // Walls: the primary station's first, then each other station's joined to
-  // a wall on the same line or added.
+  // a wall on the same line or added; then joined walls that a later piece
+  // bridged (two pieces of one wall, a third between them) until none meet.
   std::vector<std::vector<int>> wall_map(runs.size());
   std::vector<Line2> lines;
+  // Whether `l` lies on `L`'s line near its extent; [lo, hi]: l along L.
+  auto onLine = [](const Line2& L, const Line2& l, double& lo, double& hi) {
+    if (std::abs(L.dir.dot(l.dir)) < kWallParallelCos) return false;
+    const Eigen::Vector2d n(-L.dir.y(), L.dir.x());
+    const Eigen::Vector2d a = l.point + l.dir * l.s0, b = l.point + l.dir * l.s1;
+    if (std::abs((0.5 * (a + b) - L.point).dot(n)) > kWallOffset) return false;
+    const double sa = (a - L.point).dot(L.dir), sb = (b - L.point).dot(L.dir);
+    lo = std::min(sa, sb);
+    hi = std::max(sa, sb);
+    return lo <= L.s1 + kWallGap && hi >= L.s0 - kWallGap;
+  };
+  auto joinInto = [&](std::size_t m, const WallResult& w, double lo, double hi) {
+    Line2& M = lines[m];
+    WallResult& into = res.walls[m];
+    const double s0 = std::min(M.s0, lo), s1 = std::max(M.s1, hi);
+    unionCorners(into, w, R);
+    const Eigen::Vector3d p0 = R * into.line_point;
+    const Eigen::Vector2d start = M.point + M.dir * s0;
+    into.line_point = R.transpose() * Eigen::Vector3d(start.x(), start.y(), p0.z());
+    M.point = start;
+    M.s0 = 0;
+    M.s1 = s1 - s0;
+    into.length = M.s1;
+    into.height = std::max(into.height, w.height);
+    into.points += w.points;
+  };
   auto addWalls = [&](std::size_t k) {
     wall_map[k].assign(runs[k].walls.size(), -1);
     for (std::size_t wi = 0; wi < runs[k].walls.size(); ++wi) {
       const WallResult& w = runs[k].walls[wi];
       const Line2 l = levelledLine(w, R);
       int joined = -1;
-      for (std::size_t m = 0; m < lines.size() && joined < 0; ++m) {
-        const Line2& L = lines[m];
-        const double c = L.dir.dot(l.dir);
-        if (std::abs(c) < kWallParallelCos) continue;
-        const Eigen::Vector2d n(-L.dir.y(), L.dir.x());
-        const Eigen::Vector2d a = l.point, b = l.point + l.dir * l.s1;
-        if (std::abs((0.5 * (a + b) - L.point).dot(n)) > kWallOffset) continue;
-        const double sa = (a - L.point).dot(L.dir), sb = (b - L.point).dot(L.dir);
-        const double lo = std::min(sa, sb), hi = std::max(sa, sb);
-        if (lo > L.s1 + kWallGap || hi < L.s0 - kWallGap) continue;
-        joined = static_cast<int>(m);
-        Line2& M = lines[m];
-        WallResult& into = res.walls[m];
-        const double s0 = std::min(M.s0, lo), s1 = std::max(M.s1, hi);
-        unionCorners(into, w, R);
-        const Eigen::Vector3d p0 = R * into.line_point;
-        const Eigen::Vector2d start = M.point + M.dir * s0;
-        into.line_point = R.transpose() * Eigen::Vector3d(start.x(), start.y(), p0.z());
-        M.point = start;
-        M.s0 = 0;
-        M.s1 = s1 - s0;
-        into.length = M.s1;
-        into.height = std::max(into.height, w.height);
-        into.points += w.points;
-      }
+      double lo = 0, hi = 0;
+      for (std::size_t m = 0; m < lines.size() && joined < 0; ++m)
+        if (onLine(lines[m], l, lo, hi)) {
+          joined = static_cast<int>(m);
+          joinInto(m, w, lo, hi);
+        }
       if (joined < 0) {
         joined = static_cast<int>(res.walls.size());
         res.walls.push_back(w);
-        res.walls.back().id = joined;
         lines.push_back(l);
       }
       wall_map[k][wi] = joined;
@@ -163,6 +170,21 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
   addWalls(primary);
   for (std::size_t k = 0; k < runs.size(); ++k)
     if (k != primary) addWalls(k);
+  for (bool joined = true; joined;) {
+    joined = false;
+    for (std::size_t m = 0; m < lines.size() && !joined; ++m)
+      for (std::size_t n = m + 1; n < lines.size() && !joined; ++n) {
+        double lo = 0, hi = 0;
+        if (!onLine(lines[m], lines[n], lo, hi)) continue;
+        joinInto(m, res.walls[n], lo, hi);
+        res.walls.erase(res.walls.begin() + static_cast<long>(n));
+        lines.erase(lines.begin() + static_cast<long>(n));
+        for (auto& map : wall_map)
+          for (int& x : map) x = x == static_cast<int>(n) ? static_cast<int>(m) : x > static_cast<int>(n) ? x - 1 : x;
+        joined = true;
+      }
+  }
+  for (std::size_t m = 0; m < res.walls.size(); ++m) res.walls[m].id = static_cast<int>(m);
 
   // Doors: one per doorway, the best report of it.
   for (std::size_t k = 0; k < runs.size(); ++k)
@@ -215,10 +237,15 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
     }
 
   if (with_reconstruction) {
+    // Every wall from the floor to the ceiling, as a single scan rebuilds
+    // them; without a ceiling, to the top of the highest wall.
     std::vector<reconstruction::WallPatch> patches;
+    double highest = 0;
+    for (const WallResult& w : res.walls) highest = std::max(highest, w.height);
     for (std::size_t m = 0; m < res.walls.size(); ++m) {
       const double z = (R * res.walls[m].line_point).z();
-      patches.push_back({lines[m].point, lines[m].dir, lines[m].s0, lines[m].s1, z, z + res.walls[m].height});
+      const double top = res.ceiling && res.floor ? z + (*res.ceiling - *res.floor) : z + highest;
+      patches.push_back({lines[m].point, lines[m].dir, lines[m].s0, lines[m].s1, z, top});
     }
     std::vector<reconstruction::Opening> openings;
     for (const DoorResult& d : res.doors) {
