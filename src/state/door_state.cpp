@@ -211,11 +211,25 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     const double lam = std::clamp((dc - vsd).dot(r) / len2, 0.0, 1.0);
     return !((vsd + lam * r - dc).norm() > reach + Lmax);
   };
-  auto gatherRays = [&] {
-    for (const auto& q : points) {
+  // The rays in kRayParts parts of the points (tasks), joined in order.
+  constexpr int kRayParts = 3;
+  std::vector<std::vector<Ray>> ray_parts(kRayParts);
+  auto gatherRayPart = [&](int k) {
+    const std::size_t i0 = points.size() * k / kRayParts, i1 = points.size() * (k + 1) / kRayParts;
+    for (std::size_t i = i0; i < i1; ++i) {
+      const auto& q = points[i];
       Eigen::Vector2d qsd;
       double len2;
-      if (nearDoorway(q, qsd, len2)) rays.push_back({qsd, q.z(), std::sqrt(len2)});
+      if (nearDoorway(q, qsd, len2)) ray_parts[k].push_back({qsd, q.z(), std::sqrt(len2)});
+    }
+  };
+  auto joinRays = [&] {
+    std::size_t total = 0;
+    for (const auto& part : ray_parts) total += part.size();
+    rays.reserve(total);
+    for (auto& part : ray_parts) {
+      rays.insert(rays.end(), part.begin(), part.end());
+      std::vector<Ray>().swap(part);
     }
     // Enough rays to see free space at 5 cm x 10 cm cells; more only cost time.
     if (rays.size() > 15000) {
@@ -227,7 +241,8 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   };
   const bool rays_needed = closed_band_only_above <= 0;
   if (rays_needed) {
-    forEachTask(2, [&](std::size_t i) { i == 0 ? gatherPoints() : gatherRays(); });
+    forEachTask(1 + kRayParts, [&](std::size_t i) { i == 0 ? gatherPoints() : gatherRayPart(static_cast<int>(i) - 1); });
+    joinRays();
   } else {
     gatherPoints();
   }
@@ -250,7 +265,10 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     fit.best_coverage = band_cov;
     return fit;
   }
-  if (!rays_needed) gatherRays();
+  if (!rays_needed) {
+    forEachTask(kRayParts, [&](std::size_t k) { gatherRayPart(static_cast<int>(k)); });
+    joinRays();
+  }
 
   // Exhaustive search over hinge side, swing side and angle: cells of the
   // leaf holding points (support) against cells rays went through (contradiction).
