@@ -262,6 +262,21 @@ float ViewTop::tanElevation(const Eigen::Vector3f& q) const {
   return h > 1e-3f ? (q.z() - viewpoint.z()) / h : 0.0f;
 }
 
+namespace {
+// tanElevation(q) lies below hi for sure, told without hypot: the quotient
+// in double by sqrt in double is within a few parts in 1e7 of it (both
+// roundings to float included), far inside the margin of 1e-5 of it; near
+// the viewpoint's vertical, or near hi, false (then the caller works
+// tanElevation out). Nothing lies below -infinity (an empty bin).
+inline bool surelyBelow(const ViewTop& v, const Eigen::Vector3f& q, float hi) {
+  const float dx = q.x() - v.viewpoint.x(), dy = q.y() - v.viewpoint.y();
+  const double h2 = static_cast<double>(dx) * dx + static_cast<double>(dy) * dy;
+  if (!(h2 > 4e-6)) return false;  // h within 2 mm: tanElevation's cut-off at 1 mm is near
+  const double t = static_cast<double>(q.z() - v.viewpoint.z()) / std::sqrt(h2);
+  return t + 1e-5 * std::abs(t) + 1e-30 < hi;
+}
+}  // namespace
+
 ViewTop viewTop(const Points& points, const Eigen::Vector3f& viewpoint) {
   ViewTop v;
   v.viewpoint = viewpoint;
@@ -385,7 +400,9 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
       for (int i : w.inliers) {
         const auto& q = points[i];
         const int b = view->bin(q);
-        if (b >= 0) top[b] = std::max(top[b], view->tanElevation(q));
+        // A camera's rows come top down: a bearing's first point is mostly its highest.
+        if (b >= 0 && !surelyBelow(*view, q, top[b]))
+          top[b] = std::max(top[b], view->tanElevation(q));
       }
       int bins = 0, cut = 0;
       for (std::size_t b = 0; b < top.size(); ++b)
