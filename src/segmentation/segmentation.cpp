@@ -156,14 +156,12 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
   // near edges, corners and thin parts the 3 x 3 x 3 fine cells around.
 #pragma omp parallel
   {
-    std::vector<std::uint32_t> block;
 #pragma omp for schedule(dynamic, 256)
     for (long long c = 0; c < static_cast<long long>(cells); ++c) {
       Pca r = coarse[coarse_of[c]];
       if (!r.ok || r.curvature > kRefineCurvature) {
         Moments acc;
-        grid.neighbourCells(static_cast<std::size_t>(c), 1, block);
-        for (std::uint32_t o : block) acc.add(m[o]);
+        grid.forEachNeighbourCell(static_cast<std::size_t>(c), [&](std::uint32_t o) { acc.add(m[o]); });
         if (acc.n >= need) r = pca(acc);
       }
       if (!r.ok) continue;
@@ -632,7 +630,6 @@ std::vector<std::vector<int>> growRegions(const Points& points, const Normals& n
   util::radixSortBy(order, [&](int c) { return static_cast<std::uint64_t>(util::orderedBits(curv[c])); });
   std::vector<int> label(cells, -1);
   std::vector<std::vector<int>> regions;
-  std::vector<std::uint32_t> nbs;
   std::vector<int> members, stack, region;
   for (int seed : order) {
     if (label[seed] != -1) continue;
@@ -643,14 +640,13 @@ std::vector<std::vector<int>> growRegions(const Points& points, const Normals& n
     while (!stack.empty()) {
       const int cur = stack.back();
       stack.pop_back();
-      grid.neighbourCells(static_cast<std::size_t>(cur), 1, nbs);
-      for (std::uint32_t nb : nbs) {
-        if (!live[nb] || label[nb] != -1) continue;
-        if (std::abs(cn[cur].dot(cn[nb])) < cos_thr) continue;
+      grid.forEachNeighbourCell(static_cast<std::size_t>(cur), [&](std::uint32_t nb) {
+        if (!live[nb] || label[nb] != -1) return;
+        if (std::abs(cn[cur].dot(cn[nb])) < cos_thr) return;
         label[nb] = id;
         members.push_back(static_cast<int>(nb));
         if (curv[nb] <= p.region_curvature) stack.push_back(static_cast<int>(nb));
-      }
+      });
     }
     region.clear();
     for (int c : members)
