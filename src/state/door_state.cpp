@@ -223,20 +223,18 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       if (nearDoorway(q, qsd, len2)) ray_parts[k].push_back({qsd, q.z(), std::sqrt(len2)});
     }
   };
+  // Joined, every stride-th kept: enough rays to see free space at 5 cm x
+  // 10 cm cells; more only cost time.
   auto joinRays = [&] {
     std::size_t total = 0;
     for (const auto& part : ray_parts) total += part.size();
-    rays.reserve(total);
+    const std::size_t stride = total > 15000 ? (total + 14999) / 15000 : 1;
+    rays.reserve((total + stride - 1) / stride);
+    std::size_t at = 0;  // index in the joined list of the part's first ray
     for (auto& part : ray_parts) {
-      rays.insert(rays.end(), part.begin(), part.end());
+      for (std::size_t i = (stride - at % stride) % stride; i < part.size(); i += stride) rays.push_back(part[i]);
+      at += part.size();
       std::vector<Ray>().swap(part);
-    }
-    // Enough rays to see free space at 5 cm x 10 cm cells; more only cost time.
-    if (rays.size() > 15000) {
-      const std::size_t stride = (rays.size() + 14999) / 15000;
-      std::vector<Ray> thin;
-      for (std::size_t i = 0; i < rays.size(); i += stride) thin.push_back(rays[i]);
-      rays.swap(thin);
     }
   };
   const bool rays_needed = closed_band_only_above <= 0;
