@@ -153,6 +153,7 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   res.floor = fc.floor;
   res.ceiling = fc.ceiling;
   std::vector<float> vertical_z;
+  vertical_z.reserve(pts.size());
   for (std::size_t i = 0; i < pts.size(); ++i)
     if (std::abs(normals.n[i].z()) < p.vertical_normal_z) vertical_z.push_back(pts[i].z());
   if (vertical_z.size() < 20) {

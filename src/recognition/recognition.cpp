@@ -275,6 +275,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     // the k-th smallest is found by walking the blocks, then one block's
     // ranks): the same value as selecting from the pooled window each time.
     std::vector<std::pair<float, int>> dev;  // deviation, column
+    dev.reserve(wall.inliers.size());
     for (int i : wall.inliers) {
       const int c = util::floorToInt((wall.along(points[i]) - s_lo) / cell);
       if (c >= 0 && c < cols) dev.push_back({static_cast<float>(std::abs(wall.signedDistance(points[i]))), c});

@@ -362,6 +362,7 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
   };
   // Split along the wall at gaps wider than wall_gap.
   std::vector<std::pair<double, int>> along;
+  along.reserve(inliers.size());
   for (int i : inliers) along.push_back({(Eigen::Vector2d(points[i].x(), points[i].y()) - point).dot(direction), i});
   util::sortPairs(along);  // std::sort's order, in linear time
   std::size_t start = 0;
@@ -484,6 +485,7 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
                                  bool ceiling_known, const Eigen::Vector2d& viewpoint, const Parameters& p,
                                  const ViewTop* view, const OnWall& on_wall) {
   std::vector<int> pool;
+  pool.reserve(points.size());
   for (std::size_t i = 0; i < points.size(); ++i)
     if (std::abs(normals.n[i].z()) < p.vertical_normal_z && points[i].z() > floor_z + 0.05) pool.push_back(static_cast<int>(i));
   std::vector<WallPlane> walls;
@@ -559,9 +561,12 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
       if (best_count * stride < static_cast<std::size_t>(p.min_wall_points)) break;
       // Refine twice by TLS on the inliers.
       std::vector<int> inl;
+      std::vector<Eigen::Vector2d> q2;
+      inl.reserve(pool.size());
+      q2.reserve(pool.size());
       for (int pass = 0; pass < 3; ++pass) {
         inl.clear();
-        std::vector<Eigen::Vector2d> q2;
+        q2.clear();
         for (int i : pool) {
           const Eigen::Vector2d r(points[i].x(), points[i].y());
           if (std::abs((r - best_pt).dot(best_n)) < p.wall_distance &&
@@ -581,6 +586,7 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
         std::vector<char> used(points.size(), 0);
         for (int i : inl) used[i] = 1;
         std::vector<int> rest;
+        rest.reserve(pool.size());
         for (int i : pool)
           if (!used[i]) rest.push_back(i);
         pool.swap(rest);

@@ -216,6 +216,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   std::vector<std::vector<Ray>> ray_parts(kRayParts);
   auto gatherRayPart = [&](int k) {
     const std::size_t i0 = points.size() * k / kRayParts, i1 = points.size() * (k + 1) / kRayParts;
+    ray_parts[k].reserve(i1 - i0);  // only what is used is touched
     for (std::size_t i = i0; i < i1; ++i) {
       const auto& q = points[i];
       Eigen::Vector2d qsd;
