@@ -503,6 +503,9 @@ __attribute__((target("avx2"))) std::size_t countInliersAvx2(const float* x, con
                                      _mm256_cmp_pd(_mm256_and_pd(dot, abs_mask), vag, _CMP_GT_OQ));
     count += static_cast<std::size_t>(__builtin_popcount(static_cast<unsigned>(_mm256_movemask_pd(in))));
   }
+  // Upper halves of the vector registers cleared before returning to SSE
+  // code: left dirty, every SSE instruction after would wait on them.
+  _mm256_zeroupper();
   return count + countInliersScalar(x + j, y + j, nxs + j, nys + j, n - j, qx, qy, nx, ny, wd, agree);
 }
 #endif
