@@ -44,6 +44,8 @@ double fastAtan2Deg(double y, double x) {
   return a * (180 / M_PI);
 }
 constexpr double kBearingSlackDeg = 0.01;
+// A ray is tested outright at this many angles needed or fewer, its arc not worked out.
+constexpr int kOutrightAngles = 6;
 
 // An upper bound of asin(x), x in [0, 1], within 2% for x <= 0.5: asin's
 // series x + x^3/6 + 3x^5/40 + ... has no coefficient above 1/6 after the
@@ -382,6 +384,11 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     std::vector<Eigen::Vector2d> E, K, P;
     axes(w, E, K, P);
     const Eigen::Vector2d H(w.s_h, w.d_h);
+    // With few angles needed a ray on the chord is tested at each of them
+    // outright: cheaper than working out its arc (the test decides either way).
+    int needed = 0;
+    for (int ai = first; ai <= last; ++ai) needed += !need || (*need)[ai];
+    const bool outright = needed <= kOutrightAngles;
     for (const Ray& ray : rays) {
       // The part of the ray that counts: from the sensor to 6 cm before its point.
       const Eigen::Vector2d A = vsd, B = ray.q - (0.06 / ray.len) * (ray.q - vsd);
@@ -409,6 +416,10 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
         char& f = blocked[ai * cells + static_cast<std::size_t>(ab) * nz + std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
         if (!f) f = 1, ++w.con[static_cast<std::size_t>(ai) * na_max + ab];
       };
+      if (outright) {
+        for (int ai = first; ai <= last; ++ai) test(ai);
+        continue;
+      }
       const double tc = std::clamp(-bq / uu, t0, t1);
       const double rho_min = (w0 + tc * u).norm();
       if (rho_min <= std::max(0.05, lt / 2)) {
