@@ -371,9 +371,10 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       forArc(w, c - below, c + above, test);
     }
   };
-  auto scoreRays = [&](HingeRun& w, const std::vector<char>* need) {
-    std::vector<char> blocked(w.count * cells, 0);  // per angle: leaf bin x z bin
-    w.con.assign(static_cast<std::size_t>(w.count) * na_max, 0);
+  // The cells (per angle: leaf bin x z bin) that rays [r0, r1) go through,
+  // marked in blocked; the count of each leaf bin's is its contradiction.
+  auto markRays = [&](const HingeRun& w, const std::vector<char>* need, std::size_t r0, std::size_t r1,
+                      std::vector<char>& blocked) {
     // The angles needed lie in [first, last]: a test outside would return at once.
     int first = 0, last = w.count - 1;
     if (need) {
@@ -389,7 +390,8 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     int needed = 0;
     for (int ai = first; ai <= last; ++ai) needed += !need || (*need)[ai];
     const bool outright = needed <= kOutrightAngles;
-    for (const Ray& ray : rays) {
+    for (std::size_t ri = r0; ri < r1; ++ri) {
+      const Ray& ray = rays[ri];
       // The part of the ray that counts: from the sensor to 6 cm before its point.
       const Eigen::Vector2d A = vsd, B = ray.q - (0.06 / ray.len) * (ray.q - vsd);
       const Eigen::Vector2d u = B - A, w0 = A - H;
@@ -413,8 +415,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
         if (!crossLeaf(vsd, r, vsz, dz, lam_max, P[ai], E[ai], a, z) || a < 0.05 || a >= Lmax || z < z0 || z >= z1)
           return;
         const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
-        char& f = blocked[ai * cells + static_cast<std::size_t>(ab) * nz + std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
-        if (!f) f = 1, ++w.con[static_cast<std::size_t>(ai) * na_max + ab];
+        blocked[ai * cells + static_cast<std::size_t>(ab) * nz + std::min(nz - 1, static_cast<int>((z - z0) / zbin))] = 1;
       };
       if (outright) {
         for (int ai = first; ai <= last; ++ai) test(ai);
@@ -437,6 +438,22 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       const double dl = asinAbove(std::min(1.0, lt / 2 / rho_min)) * 180 / M_PI + kBearingSlackDeg;
       forArc(w, lo - kBearingSlackDeg, hi + dl, test, first, last);
     }
+  };
+  // Each leaf bin's contradiction at the angles needed (0 at the others, never read).
+  auto tallyRays = [&](HingeRun& w, const std::vector<char>* need, const std::vector<char>& blocked) {
+    w.con.assign(static_cast<std::size_t>(w.count) * na_max, 0);
+    for (int ai = 0; ai < w.count; ++ai)
+      for (int ab = 0; ab < na_max && (!need || (*need)[ai]); ++ab) {
+        const char* b = &blocked[ai * cells + static_cast<std::size_t>(ab) * nz];
+        int n = 0;
+        for (int zb = 0; zb < nz; ++zb) n += b[zb];
+        w.con[static_cast<std::size_t>(ai) * na_max + ab] = n;
+      }
+  };
+  auto scoreRays = [&](HingeRun& w, const std::vector<char>* need) {
+    std::vector<char> blocked(w.count * cells, 0);
+    markRays(w, need, 0, rays.size(), blocked);
+    tallyRays(w, need, blocked);
   };
   auto finishScores = [&](HingeRun& w, const std::vector<char>* need) {
     w.scores.assign(w.count, Score());
@@ -613,7 +630,14 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     HingeRun probe = global[bi];
     std::vector<char> only(probe.count, 0);
     only[ba] = 1;
-    scoreRays(probe, &only);
+    // Its rays in two halves at once, the cells they block joined.
+    std::vector<char> blocked(probe.count * cells, 0), blocked2(probe.count * cells, 0);
+    const std::size_t mid = rays.size() / 2;
+    forEachTask(2, [&](std::size_t h) {
+      markRays(probe, &only, h == 0 ? 0 : mid, h == 0 ? mid : rays.size(), h == 0 ? blocked : blocked2);
+    });
+    for (std::size_t k = 0; k < blocked.size(); ++k) blocked[k] |= blocked2[k];
+    tallyRays(probe, &only, blocked);
     finishScores(probe, &only);
     lower = probe.scores[ba].score;
   }
