@@ -176,11 +176,6 @@ bool downsampleDense(long long n, const PointAt& point, const std::vector<std::u
   };
   auto fill = [&](Half& h, long long i0, long long i1) {
     h.brick.assign(static_cast<std::size_t>(volume), CellMap::kNone);
-    // Room for a cell a point: only what is used is touched, and nothing is
-    // copied as the lists grow.
-    h.sum.reserve(static_cast<std::size_t>(i1 - i0));
-    h.count.reserve(static_cast<std::size_t>(i1 - i0));
-    h.keys.reserve(static_cast<std::size_t>(i1 - i0));
     std::uint64_t last_key = kNoKey;
     std::uint32_t last_id = 0;
     for (long long i = i0; i < i1; ++i) {

@@ -37,13 +37,6 @@ bool NeighbourGrid::buildDense(const std::vector<Eigen::Vector3f>& points, std::
   dense_.assign(static_cast<std::size_t>(volume), CellMap::kNone);
   children_.clear();
   coarse_coord_.clear();
-  // Room for a cell (and a coarse cell) a point: only what is used is
-  // touched, and nothing is copied as the lists grow.
-  children_.reserve(8 * n);
-  coarse_coord_.reserve(n);
-  count.reserve(n);
-  coord_.reserve(n);
-  coarse_of_.reserve(n);
   Eigen::Vector3i last = Eigen::Vector3i::Constant(std::numeric_limits<int>::min());
   std::uint32_t last_id = 0;
   for (std::size_t i = 0; i < n; ++i) {
