@@ -604,31 +604,41 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
       std::vector<Eigen::Vector2d> q2;
       inl.reserve(pool.size());
       q2.reserve(pool.size());
-      for (int pass = 0; pass < 3; ++pass) {
-        inl.clear();
-        q2.clear();
-        for (int i : pool) {
+      // The inliers of pool[j0, j1) in pool order.
+      auto inliersOf = [&](std::size_t j0, std::size_t j1, std::vector<int>& in, std::vector<Eigen::Vector2d>& q) {
+        for (std::size_t j = j0; j < j1; ++j) {
+          const int i = pool[j];
           const Eigen::Vector2d r(points[i].x(), points[i].y());
           if (std::abs((r - best_pt).dot(best_n)) < p.wall_distance &&
               std::abs(best_n.x() * normals.n[i].x() + best_n.y() * normals.n[i].y()) > p.wall_normal_agreement) {
-            inl.push_back(i);
-            q2.push_back(r);
+            in.push_back(i);
+            q.push_back(r);
           }
         }
+      };
+      for (int pass = 0; pass < 3; ++pass) {
+        inl.clear();
+        q2.clear();
+        inliersOf(0, pool.size(), inl, q2);
         if (q2.size() < 3 || pass == 2) break;
         Eigen::Vector2d c, dir;
         fitLine(q2, c, dir);
         best_pt = c;
         best_n = Eigen::Vector2d(-dir.y(), dir.x());
       }
-      // Remove the inliers from the pool whatever becomes of them.
+      // Remove the inliers from the pool whatever becomes of them (they are
+      // a part of it, in its order).
       {
-        std::vector<char> used(points.size(), 0);
-        for (int i : inl) used[i] = 1;
         std::vector<int> rest;
         rest.reserve(pool.size());
-        for (int i : pool)
-          if (!used[i]) rest.push_back(i);
+        std::size_t k = 0;
+        for (int i : pool) {
+          if (k < inl.size() && inl[k] == i) {
+            ++k;
+            continue;
+          }
+          rest.push_back(i);
+        }
         pool.swap(rest);
       }
       const Eigen::Vector2d dir(best_n.y(), -best_n.x());
