@@ -73,9 +73,8 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
   std::vector<Moments> m(cells);
 #pragma omp parallel for schedule(static, 1024)
   for (long long c = 0; c < static_cast<long long>(cells); ++c) {
-    for (const int* it = grid.cellBegin(c); it != grid.cellEnd(c); ++it) {
-      m[c].addPoint(grid.point(*it).cast<double>() - origin);
-    }
+    const Eigen::Vector3f* q = grid.cellPoints(c);
+    for (const int* it = grid.cellBegin(c); it != grid.cellEnd(c); ++it, ++q) m[c].addPoint(q->cast<double>() - origin);
   }
   // A coarse level (cells twice as wide) for sparse surroundings: 27 coarse
   // cells reach as far as 125 fine ones at a fifth of the lookups.

@@ -31,6 +31,8 @@ class NeighbourGrid {
   // Points of cell c, as indices into the points the grid was built on.
   const int* cellBegin(std::size_t c) const { return order_.data() + begin_[c]; }
   const int* cellEnd(std::size_t c) const { return order_.data() + begin_[c + 1]; }
+  // The points of cell c as stored, in cellBegin's order: point(*(cellBegin(c) + k)) is cellPoints(c)[k].
+  const Eigen::Vector3f* cellPoints(std::size_t c) const { return pos_.data() + begin_[c]; }
   // The point of index i as stored (in the frame the grid was built in).
   const Eigen::Vector3f& point(int i) const { return pos_[slot_[i]]; }
 
