@@ -99,7 +99,32 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   // Cells of 1.5 voxels: a neighbourhood of 3 x 3 x 3 cells, 4.5 voxels wide,
   // holds normal_k points or more of a surface thinned to the voxel size even
   // where the scan is sparser than the voxel grid.
-  const segmentation::NeighbourGrid grid(thinned, static_cast<float>(1.5 * std::max(p.voxel_size, 0.01)));
+  // A camera frame's pixels without a return (rays along which nothing was
+  // in range) depend on the input alone: found on the other core while this
+  // one builds the grid.
+  segmentation::NeighbourGrid grid;
+  preprocess::Points no_return;
+  {
+    std::exception_ptr error;
+    auto guarded = [&error](const auto& f) {
+      try {
+        f();
+      } catch (...) {
+#pragma omp critical(dsr_grid_stage_error)
+        if (!error) error = std::current_exception();
+      }
+    };
+#pragma omp parallel if (organized)
+#pragma omp single
+    {
+      if (organized) {
+#pragma omp task shared(no_return, guarded)
+        guarded([&] { no_return = preprocess::noReturnRays(cloud, viewpoint_in.cast<float>()); });
+      }
+      guarded([&] { grid = segmentation::NeighbourGrid(thinned, static_cast<float>(1.5 * std::max(p.voxel_size, 0.01))); });
+    }
+    if (error) std::rethrow_exception(error);
+  }
   segmentation::Normals normals = segmentation::estimateNormals(thinned, grid, p.normal_k, viewpoint_in.cast<float>());
   watch.mark("normals");
 
@@ -130,6 +155,7 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   res.floor = fc.floor;
   res.ceiling = fc.ceiling;
   std::vector<float> vertical_z;
+  vertical_z.reserve(pts.size());
   for (std::size_t i = 0; i < pts.size(); ++i)
     if (std::abs(normals.n[i].z()) < p.vertical_normal_z) vertical_z.push_back(pts[i].z());
   if (vertical_z.size() < 20) {
@@ -157,7 +183,7 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   segmentation::ViewTop view = organized ? segmentation::viewTop(pts, viewpoint) : segmentation::ViewTop{};
   // Its pixels without a return: rays along which nothing was in range.
   if (organized) {
-    view.no_return = preprocess::noReturnRays(cloud, viewpoint_in.cast<float>());
+    view.no_return = std::move(no_return);
     for (auto& d : view.no_return) d = R * d;
   }
   // Each wall's doorways are sought (as findDoors would) as soon as

@@ -4,6 +4,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <random>
 #include <stdexcept>
 #include <limits>
@@ -148,41 +149,114 @@ bool downsampleDense(long long n, const PointAt& point, const std::vector<std::u
   const Eigen::Vector3i dims = Eigen::Vector3i(brickOf(hi.x()), brickOf(hi.y()), brickOf(hi.z())) - blo + Eigen::Vector3i::Ones();
   const double volume = static_cast<double>(dims.x()) * dims.y() * dims.z();
   if (volume > 2.0 * static_cast<double>(n) + (1 << 20)) return false;
-  std::vector<std::uint32_t> brick(static_cast<std::size_t>(volume), CellMap::kNone);
-  std::vector<std::uint32_t> cell;  // brick x 64 -> cell
-  std::vector<Eigen::Vector3d> sum;
-  std::vector<int> count;
-  last_key = kNoKey;
-  std::uint32_t last_id = 0;
-  for (long long i = 0; i < n; ++i) {
-    if (key[i] == kNoKey) continue;
-    // A scan visits a voxel in runs of points: the run's cell is known.
-    if (key[i] != last_key) {
-      const Eigen::Vector3i c = unpackCell(key[i]);
-      const Eigen::Vector3i b(brickOf(c.x()), brickOf(c.y()), brickOf(c.z()));
-      std::uint32_t& k = brick[(static_cast<std::size_t>(b.z() - blo.z()) * dims.y() + (b.y() - blo.y())) * dims.x() +
-                               (b.x() - blo.x())];
-      if (k == CellMap::kNone) {
-        k = static_cast<std::uint32_t>(cell.size() / 64);
-        cell.resize(cell.size() + 64, CellMap::kNone);
-      }
-      std::uint32_t& id = cell[64 * static_cast<std::size_t>(k) + (c.x() & 3) + 4 * (c.y() & 3) + 16 * (c.z() & 3)];
-      if (id == CellMap::kNone) {
-        id = static_cast<std::uint32_t>(sum.size());
-        sum.push_back(point(i).template cast<double>());
-        count.push_back(1);
+  // The cell entry of key k in a dense index (brick -> its 64 cells), the
+  // brick made when missing.
+  auto entry = [&](std::vector<std::uint32_t>& brick, std::vector<std::uint32_t>& cell, std::uint64_t k) -> std::uint32_t& {
+    const Eigen::Vector3i c = unpackCell(k);
+    const Eigen::Vector3i b(brickOf(c.x()), brickOf(c.y()), brickOf(c.z()));
+    std::uint32_t& kb = brick[(static_cast<std::size_t>(b.z() - blo.z()) * dims.y() + (b.y() - blo.y())) * dims.x() +
+                              (b.x() - blo.x())];
+    if (kb == CellMap::kNone) {
+      kb = static_cast<std::uint32_t>(cell.size() / 64);
+      cell.resize(cell.size() + 64, CellMap::kNone);
+    }
+    return cell[64 * static_cast<std::size_t>(kb) + (c.x() & 3) + 4 * (c.y() & 3) + 16 * (c.z() & 3)];
+  };
+  // A large cloud in two halves at once, each numbering and summing the
+  // cells it meets as below, in an index of its own. A cell of the second
+  // half not met in the first comes after every cell of the first (in order
+  // of first point) with the sums of all its points in order; a cell met in
+  // both takes the first's number, and the second's points are added to the
+  // first's sums after it, in point order: the numbers and sums of one pass.
+  struct Half {
+    std::vector<std::uint32_t> brick, cell;  // brick -> its 64 cells -> cell number
+    std::vector<Eigen::Vector3d> sum;
+    std::vector<int> count;
+    std::vector<std::uint64_t> keys;  // each cell's key
+  };
+  auto fill = [&](Half& h, long long i0, long long i1) {
+    h.brick.assign(static_cast<std::size_t>(volume), CellMap::kNone);
+    std::uint64_t last_key = kNoKey;
+    std::uint32_t last_id = 0;
+    for (long long i = i0; i < i1; ++i) {
+      if (key[i] == kNoKey) continue;
+      // A scan visits a voxel in runs of points: the run's cell is known.
+      if (key[i] != last_key) {
+        std::uint32_t& id = entry(h.brick, h.cell, key[i]);
+        if (id == CellMap::kNone) {
+          id = static_cast<std::uint32_t>(h.sum.size());
+          h.sum.push_back(point(i).template cast<double>());
+          h.count.push_back(1);
+          h.keys.push_back(key[i]);
+          last_key = key[i];
+          last_id = id;
+          continue;
+        }
         last_key = key[i];
         last_id = id;
-        continue;
       }
-      last_key = key[i];
-      last_id = id;
+      h.sum[last_id] += point(i).template cast<double>();
+      ++h.count[last_id];
     }
-    sum[last_id] += point(i).template cast<double>();
-    ++count[last_id];
+  };
+  long long mid = n;
+#ifdef _OPENMP
+  if (n >= 50000 && omp_get_max_threads() >= 2) mid = n / 2;
+#endif
+  Half first, second;
+  if (mid == n) {
+    fill(first, 0, n);
+  } else {
+    std::exception_ptr error;
+#pragma omp parallel for schedule(static, 1) num_threads(2)
+    for (int t = 0; t < 2; ++t) {
+      try {
+        t == 0 ? fill(first, 0, mid) : fill(second, mid, n);
+      } catch (...) {
+#pragma omp critical(dsr_downsample_error)
+        if (!error) error = std::current_exception();
+      }
+    }
+    if (error) std::rethrow_exception(error);
   }
-  out.resize(sum.size());
-  for (std::size_t k = 0; k < sum.size(); ++k) out[k] = (sum[k] / count[k]).template cast<float>();
+  // The second half's cells: the first's number when met there (shared), else kNone.
+  std::vector<std::uint32_t> shared(second.sum.size());
+  auto find = [&](const Half& h, std::uint64_t k) {
+    const Eigen::Vector3i c = unpackCell(k);
+    const Eigen::Vector3i b(brickOf(c.x()), brickOf(c.y()), brickOf(c.z()));
+    const std::uint32_t kb = h.brick[(static_cast<std::size_t>(b.z() - blo.z()) * dims.y() + (b.y() - blo.y())) * dims.x() +
+                                     (b.x() - blo.x())];
+    return kb == CellMap::kNone ? kb : h.cell[64 * static_cast<std::size_t>(kb) + (c.x() & 3) + 4 * (c.y() & 3) + 16 * (c.z() & 3)];
+  };
+  long long remaining = 0;  // points of the second half in shared cells
+  for (std::size_t l = 0; l < shared.size(); ++l) {
+    shared[l] = find(first, second.keys[l]);
+    if (shared[l] != CellMap::kNone) remaining += second.count[l];
+  }
+  // Their points added to the first's sums in point order (a scan stopping
+  // after the last: shared cells lie near where the halves meet).
+  {
+    std::uint64_t last_key = kNoKey;
+    std::uint32_t last_shared = CellMap::kNone;
+    for (long long i = mid; i < n && remaining > 0; ++i) {
+      if (key[i] == kNoKey) continue;
+      if (key[i] != last_key) {
+        last_key = key[i];
+        last_shared = shared[find(second, key[i])];
+      }
+      if (last_shared == CellMap::kNone) continue;
+      first.sum[last_shared] += point(i).template cast<double>();
+      ++first.count[last_shared];
+      --remaining;
+    }
+  }
+  std::size_t total = first.sum.size();
+  for (std::uint32_t id : shared) total += id == CellMap::kNone;
+  out.resize(total);
+  for (std::size_t k = 0; k < first.sum.size(); ++k) out[k] = (first.sum[k] / first.count[k]).template cast<float>();
+  std::size_t k = first.sum.size();
+  for (std::size_t l = 0; l < second.sum.size(); ++l)
+    if (shared[l] == CellMap::kNone) out[k++] = (second.sum[l] / second.count[l]).template cast<float>();
   return true;
 }
 

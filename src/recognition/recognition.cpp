@@ -5,6 +5,8 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <exception>
 #include <limits>
 
 namespace dsr {
@@ -191,6 +193,37 @@ std::vector<SetBack> setBackPanels(const Points& points, const segmentation::Wal
   return out;
 }
 
+// Points of a cloud from which findDoorways reads them in two halves at once.
+constexpr std::size_t kSplitPoints = 20000;
+
+// f(0) and, when split, f(1) at once: f(1) as an OpenMP task (taken by a
+// thread of the enclosing parallel region when it comes free, or by this
+// one when it waits), f(0) here; outside a parallel region in turn. The
+// first exception thrown is rethrown here.
+template <class F>
+void bothHalves(bool split, const F& f) {
+  if (!split) {
+    f(0);
+    return;
+  }
+  std::exception_ptr error;
+#pragma omp task shared(error, f)
+  try {
+    f(1);
+  } catch (...) {
+#pragma omp critical(dsr_both_halves_error)
+    if (!error) error = std::current_exception();
+  }
+  try {
+    f(0);
+  } catch (...) {
+#pragma omp critical(dsr_both_halves_error)
+    if (!error) error = std::current_exception();
+  }
+#pragma omp taskwait
+  if (error) std::rethrow_exception(error);
+}
+
 }  // namespace
 
 // Points a trim leg out of the plane needs where its neighbours are seen.
@@ -218,10 +251,10 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   std::vector<double> face_d_sum(sub, 0.0);
   const double d_view = wall.signedDistance(viewpoint);
   if (d_view <= 0) return {};
-  auto cellAt = [&](double s, double z) -> Cell* {
+  auto cellIndex = [&](double s, double z) -> std::ptrdiff_t {  // the cell at (s, z), as an index; -1 for none
     const int c = util::floorToInt((s - s_lo) / cell), r = util::floorToInt((z - floor_z) / row_h);
-    if (c < 0 || c >= cols || r < 0 || r >= rows) return nullptr;
-    return &grid[static_cast<std::size_t>(r) * cols + c];
+    if (c < 0 || c >= cols || r < 0 || r >= rows) return -1;
+    return static_cast<std::ptrdiff_t>(r) * cols + c;
   };
   const double footprint = std::max(p.voxel_size, 0.01);
   const int body0 = static_cast<int>(0.25 / row_h), body1 = std::min(rows, static_cast<int>(1.75 / row_h));
@@ -237,9 +270,12 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   std::vector<double> col_tol(cols, p.face_tolerance);
   {
     // The median deviation of the inliers within `win` columns: the deviations
-    // ranked once, the window slid over the columns in a Fenwick tree of
-    // ranks (the same value as selecting from the pooled window each time).
+    // ranked once, the window slid over the columns with its ranks counted
+    // in blocks of kRankBlock (adding or removing a rank is two increments;
+    // the k-th smallest is found by walking the blocks, then one block's
+    // ranks): the same value as selecting from the pooled window each time.
     std::vector<std::pair<float, int>> dev;  // deviation, column
+    dev.reserve(wall.inliers.size());
     for (int i : wall.inliers) {
       const int c = util::floorToInt((wall.along(points[i]) - s_lo) / cell);
       if (c >= 0 && c < cols) dev.push_back({static_cast<float>(std::abs(wall.signedDistance(points[i]))), c});
@@ -248,20 +284,23 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     const int n = static_cast<int>(dev.size());
     std::vector<std::vector<int>> ranks(cols);
     for (int r = 0; r < n; ++r) ranks[dev[r].second].push_back(r);
-    std::vector<int> tree(n + 1, 0);
-    int top_bit = 1;
-    while (2 * top_bit <= n) top_bit *= 2;
+    constexpr int kRankBlock = 256;
+    std::vector<unsigned char> in_window(n, 0);
+    std::vector<int> block(n / kRankBlock + 1, 0);
     int size = 0;
     auto addColumn = [&](int k, int v) {
-      for (int r : ranks[k])
-        for (int j = r + 1; j <= n; j += j & -j) tree[j] += v;
+      for (int r : ranks[k]) in_window[r] = static_cast<unsigned char>(in_window[r] + v), block[r / kRankBlock] += v;
       size += v * static_cast<int>(ranks[k].size());
     };
-    auto kth = [&](int k) {  // rank of the k-th smallest (from 0) in the window
-      int pos = 0;
-      for (int step = top_bit; step > 0; step /= 2)
-        if (pos + step <= n && tree[pos + step] <= k) pos += step, k -= tree[pos];
-      return pos;
+    auto kth = [&](int k) {  // rank of the k-th smallest (from 0) in the window; k < size
+      int b = 0;
+      while (block[b] <= k) k -= block[b++];
+      int r = b * kRankBlock;
+      for (;; ++r) {
+        if (in_window[r] > k) break;
+        k -= in_window[r];
+      }
+      return r;
     };
     const int win = std::max(1, static_cast<int>(0.5 / cell));
     for (int k = 0; k <= std::min(cols - 1, win); ++k) addColumn(k, 1);
@@ -293,59 +332,106 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     const Eigen::Vector2d q = Eigen::Vector2d(pt.x(), pt.y()) - v2;
     return wedge_sign * (wa.x() * q.y() - wa.y() * q.x()) < 0 || wedge_sign * (q.x() * wb.y() - q.y() * wb.x()) < 0;
   };
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const auto& pt = points[i];
-    const double d = wall.signedDistance(pt);
-    if (d >= -0.6 && d <= max_tol && pt.z() >= floor_z + 0.25 && pt.z() <= floor_z + 1.75)
-      near_wall.push_back(static_cast<int>(i));
-    if (d >= d_view) continue;  // beside or behind the sensor
-    if (cull && (d < band_lo || d > max_tol) && outsideWedge(pt)) continue;
-    const double s_pt = wall.along(pt);
-    if (std::abs(d) <= tolAt(s_pt)) {
-      const double s = s_pt;
-      if (Cell* c = cellAt(s, pt.z())) {
-        ++c->face;
-        c->out += d > p.casing_min_offset;
-        const double frf = std::floor((pt.z() - floor_z) / (row_h / kFine)) - fine0;
-        if (frf >= 0 && frf < fine_n) {
-          auto& h = head_fine[static_cast<std::size_t>(frf) * cols + static_cast<std::size_t>(c - grid.data()) % cols];
-          ++h.first;
-          h.second += d > p.casing_min_offset;
+  // The evidence of points [i0, i1) counted into the grid g, the arrays
+  // fd (front_diff), hf (head_fine), fo and fn (face_d_out, face_d_n) and
+  // nw (near_wall); each face offset d of sub-column col goes to addD(col, d).
+  auto scan = [&](std::size_t i0, std::size_t i1, Cell* g, int* fd, std::pair<int, int>* hf, int* fo, int* fn,
+                  std::vector<int>& nw, auto&& addD) {
+    for (std::size_t i = i0; i < i1; ++i) {
+      const auto& pt = points[i];
+      const double d = wall.signedDistance(pt);
+      if (d >= -0.6 && d <= max_tol && pt.z() >= floor_z + 0.25 && pt.z() <= floor_z + 1.75)
+        nw.push_back(static_cast<int>(i));
+      if (d >= d_view) continue;  // beside or behind the sensor
+      if (cull && (d < band_lo || d > max_tol) && outsideWedge(pt)) continue;
+      const double s_pt = wall.along(pt);
+      if (std::abs(d) <= tolAt(s_pt)) {
+        const double s = s_pt;
+        const std::ptrdiff_t ci = cellIndex(s, pt.z());
+        if (ci >= 0) {
+          Cell* c = g + ci;
+          ++c->face;
+          c->out += d > p.casing_min_offset;
+          const double frf = std::floor((pt.z() - floor_z) / (row_h / kFine)) - fine0;
+          if (frf >= 0 && frf < fine_n) {
+            auto& h = hf[static_cast<std::size_t>(frf) * cols + static_cast<std::size_t>(ci) % cols];
+            ++h.first;
+            h.second += d > p.casing_min_offset;
+          }
+          if (pt.z() > floor_z + 0.3 && pt.z() < floor_z + 1.9) {
+            const int col = std::min(sub - 1, static_cast<int>((s - s_lo) / (cell / 2)));
+            fo[col] += d > p.casing_min_offset;
+            addD(col, d);
+            ++fn[col];
+          }
         }
-        if (pt.z() > floor_z + 0.3 && pt.z() < floor_z + 1.9) {
-          const int col = std::min(sub - 1, static_cast<int>((s - s_lo) / (cell / 2)));
-          face_d_out[col] += d > p.casing_min_offset;
-          face_d_sum[col] += d;
-          ++face_d_n[col];
-        }
+        continue;
       }
-      continue;
+      // Where the ray from the sensor to this point crosses the wall's plane.
+      const double lambda = d_view / (d_view - d);
+      const Eigen::Vector3f x = viewpoint + static_cast<float>(lambda) * (pt - viewpoint);
+      const double s = wall.along(x);
+      if (d < 0) {
+        const std::ptrdiff_t ci = cellIndex(s, x.z());
+        if (ci >= 0) (d < -0.3 ? g[ci].through : g[ci].recess)++;
+      } else {
+        // An occluder shadows a patch that grows with lambda: a rectangle of
+        // cells, added to a difference array (summed once below).
+        // lambda grows without bound as the ray runs parallel to the wall, so the
+        // crossing may lie far off the grid: clamp and test in double before any
+        // cast to int (found by fuzz_pipeline; off-grid patches were skipped anyway).
+        const int r = static_cast<int>(std::min(5.0, std::ceil(0.5 * footprint * lambda / cell)));
+        const double cf = std::floor((s - s_lo) / cell);
+        const double r0f = std::floor((x.z() - r * cell - floor_z) / row_h);
+        const double r1f = std::floor((x.z() + r * cell - floor_z) / row_h);
+        if (!(cf >= -r && cf <= cols - 1 + r && r1f >= 0 && r0f <= rows - 1)) continue;  // also NaN
+        const int c = static_cast<int>(cf), r0 = static_cast<int>(r0f), r1 = static_cast<int>(r1f);
+        const int ca = std::max(0, c - r), cb = std::min(cols - 1, c + r), ra = std::max(0, r0), rb = std::min(rows - 1, r1);
+        if (ca > cb || ra > rb) continue;
+        fd[static_cast<std::size_t>(ra) * (cols + 1) + ca] += 1;
+        fd[static_cast<std::size_t>(ra) * (cols + 1) + cb + 1] -= 1;
+        fd[static_cast<std::size_t>(rb + 1) * (cols + 1) + ca] -= 1;
+        fd[static_cast<std::size_t>(rb + 1) * (cols + 1) + cb + 1] += 1;
+      }
     }
-    // Where the ray from the sensor to this point crosses the wall's plane.
-    const double lambda = d_view / (d_view - d);
-    const Eigen::Vector3f x = viewpoint + static_cast<float>(lambda) * (pt - viewpoint);
-    const double s = wall.along(x);
-    if (d < 0) {
-      if (Cell* c = cellAt(s, x.z())) (d < -0.3 ? c->through : c->recess)++;
-    } else {
-      // An occluder shadows a patch that grows with lambda: a rectangle of
-      // cells, added to a difference array (summed once below).
-      // lambda grows without bound as the ray runs parallel to the wall, so the
-      // crossing may lie far off the grid: clamp and test in double before any
-      // cast to int (found by fuzz_pipeline; off-grid patches were skipped anyway).
-      const int r = static_cast<int>(std::min(5.0, std::ceil(0.5 * footprint * lambda / cell)));
-      const double cf = std::floor((s - s_lo) / cell);
-      const double r0f = std::floor((x.z() - r * cell - floor_z) / row_h);
-      const double r1f = std::floor((x.z() + r * cell - floor_z) / row_h);
-      if (!(cf >= -r && cf <= cols - 1 + r && r1f >= 0 && r0f <= rows - 1)) continue;  // also NaN
-      const int c = static_cast<int>(cf), r0 = static_cast<int>(r0f), r1 = static_cast<int>(r1f);
-      const int ca = std::max(0, c - r), cb = std::min(cols - 1, c + r), ra = std::max(0, r0), rb = std::min(rows - 1, r1);
-      if (ca > cb || ra > rb) continue;
-      front_diff[static_cast<std::size_t>(ra) * (cols + 1) + ca] += 1;
-      front_diff[static_cast<std::size_t>(ra) * (cols + 1) + cb + 1] -= 1;
-      front_diff[static_cast<std::size_t>(rb + 1) * (cols + 1) + ca] -= 1;
-      front_diff[static_cast<std::size_t>(rb + 1) * (cols + 1) + cb + 1] += 1;
+  };
+  // Over both cores for a large cloud: the first half into the arrays
+  // above, the second (a task) into arrays of its own, added after (counts
+  // add up the same in any order); its face offsets, kept in point order,
+  // are summed after the first half's, as one pass in point order sums them.
+  const std::size_t half_at = points.size() >= kSplitPoints ? points.size() / 2 : points.size();
+  struct Second {
+    std::vector<Cell> grid;
+    std::vector<int> front_diff, face_d_out, face_d_n, near_wall;
+    std::vector<std::pair<int, int>> head_fine;
+    std::vector<std::pair<int, double>> face_d;  // (sub-column, offset) in point order
+  } second;
+  bothHalves(half_at < points.size(), [&](int h) {
+    if (h == 0) {
+      scan(0, half_at, grid.data(), front_diff.data(), head_fine.data(), face_d_out.data(), face_d_n.data(), near_wall,
+           [&](int col, double d) { face_d_sum[col] += d; });
+      return;
     }
+    second.grid.resize(grid.size());
+    second.front_diff.assign(front_diff.size(), 0);
+    second.head_fine.assign(head_fine.size(), {0, 0});
+    second.face_d_out.assign(sub, 0);
+    second.face_d_n.assign(sub, 0);
+    scan(half_at, points.size(), second.grid.data(), second.front_diff.data(), second.head_fine.data(),
+         second.face_d_out.data(), second.face_d_n.data(), second.near_wall,
+         [&](int col, double d) { second.face_d.push_back({col, d}); });
+  });
+  if (half_at < points.size()) {
+    for (std::size_t k = 0; k < grid.size(); ++k) {
+      grid[k].face += second.grid[k].face, grid[k].out += second.grid[k].out;
+      grid[k].through += second.grid[k].through, grid[k].recess += second.grid[k].recess;
+    }
+    for (std::size_t k = 0; k < front_diff.size(); ++k) front_diff[k] += second.front_diff[k];
+    for (std::size_t k = 0; k < head_fine.size(); ++k)
+      head_fine[k].first += second.head_fine[k].first, head_fine[k].second += second.head_fine[k].second;
+    for (int k = 0; k < sub; ++k) face_d_out[k] += second.face_d_out[k], face_d_n[k] += second.face_d_n[k];
+    for (const auto& cd : second.face_d) face_d_sum[cd.first] += cd.second;
+    near_wall.insert(near_wall.end(), second.near_wall.begin(), second.near_wall.end());
   }
   // Occluder shadows: 2-D prefix sums of the difference array.
   for (int r = 0; r < rows; ++r)

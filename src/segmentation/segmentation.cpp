@@ -13,6 +13,9 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#include <immintrin.h>
+#endif
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -70,9 +73,8 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
   std::vector<Moments> m(cells);
 #pragma omp parallel for schedule(static, 1024)
   for (long long c = 0; c < static_cast<long long>(cells); ++c) {
-    for (const int* it = grid.cellBegin(c); it != grid.cellEnd(c); ++it) {
-      m[c].addPoint(grid.point(*it).cast<double>() - origin);
-    }
+    const Eigen::Vector3f* q = grid.cellPoints(c);
+    for (const int* it = grid.cellBegin(c); it != grid.cellEnd(c); ++it, ++q) m[c].addPoint(q->cast<double>() - origin);
   }
   // A coarse level (cells twice as wide) for sparse surroundings: 27 coarse
   // cells reach as far as 125 fine ones at a fifth of the lookups.
@@ -156,14 +158,12 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
   // near edges, corners and thin parts the 3 x 3 x 3 fine cells around.
 #pragma omp parallel
   {
-    std::vector<std::uint32_t> block;
 #pragma omp for schedule(dynamic, 256)
     for (long long c = 0; c < static_cast<long long>(cells); ++c) {
       Pca r = coarse[coarse_of[c]];
       if (!r.ok || r.curvature > kRefineCurvature) {
         Moments acc;
-        grid.neighbourCells(static_cast<std::size_t>(c), 1, block);
-        for (std::uint32_t o : block) acc.add(m[o]);
+        grid.forEachNeighbourCell(static_cast<std::size_t>(c), [&](std::uint32_t o) { acc.add(m[o]); });
         if (acc.n >= need) r = pca(acc);
       }
       if (!r.ok) continue;
@@ -262,6 +262,21 @@ float ViewTop::tanElevation(const Eigen::Vector3f& q) const {
   return h > 1e-3f ? (q.z() - viewpoint.z()) / h : 0.0f;
 }
 
+namespace {
+// tanElevation(q) lies below hi for sure, told without hypot: the quotient
+// in double by sqrt in double is within a few parts in 1e7 of it (both
+// roundings to float included), far inside the margin of 1e-5 of it; near
+// the viewpoint's vertical, or near hi, false (then the caller works
+// tanElevation out). Nothing lies below -infinity (an empty bin).
+inline bool surelyBelow(const ViewTop& v, const Eigen::Vector3f& q, float hi) {
+  const float dx = q.x() - v.viewpoint.x(), dy = q.y() - v.viewpoint.y();
+  const double h2 = static_cast<double>(dx) * dx + static_cast<double>(dy) * dy;
+  if (!(h2 > 4e-6)) return false;  // h within 2 mm: tanElevation's cut-off at 1 mm is near
+  const double t = static_cast<double>(q.z() - v.viewpoint.z()) / std::sqrt(h2);
+  return t + 1e-5 * std::abs(t) + 1e-30 < hi;
+}
+}  // namespace
+
 ViewTop viewTop(const Points& points, const Eigen::Vector3f& viewpoint) {
   ViewTop v;
   v.viewpoint = viewpoint;
@@ -349,6 +364,7 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
   };
   // Split along the wall at gaps wider than wall_gap.
   std::vector<std::pair<double, int>> along;
+  along.reserve(inliers.size());
   for (int i : inliers) along.push_back({(Eigen::Vector2d(points[i].x(), points[i].y()) - point).dot(direction), i});
   util::sortPairs(along);  // std::sort's order, in linear time
   std::size_t start = 0;
@@ -385,7 +401,9 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
       for (int i : w.inliers) {
         const auto& q = points[i];
         const int b = view->bin(q);
-        if (b >= 0) top[b] = std::max(top[b], view->tanElevation(q));
+        // A camera's rows come top down: a bearing's first point is mostly its highest.
+        if (b >= 0 && !surelyBelow(*view, q, top[b]))
+          top[b] = std::max(top[b], view->tanElevation(q));
       }
       int bins = 0, cut = 0;
       for (std::size_t b = 0; b < top.size(); ++b)
@@ -435,8 +453,8 @@ constexpr std::size_t kTaskSample = 4000, kTaskInliers = 1000;
 // Of the n sample points (x, y, normal nx_i, ny_i), those within wd of the
 // line through (qx, qy) with normal (nx, ny) whose normal agrees (|n . n_i|
 // > agree), without branches.
-std::size_t countInliers(const float* x, const float* y, const float* nxs, const float* nys, std::size_t n, double qx,
-                         double qy, double nx, double ny, double wd, double agree) {
+std::size_t countInliersScalar(const float* x, const float* y, const float* nxs, const float* nys, std::size_t n,
+                               double qx, double qy, double nx, double ny, double wd, double agree) {
   std::size_t count = 0, j = 0;
 #if defined(__SSE2__)
   {  // two at a time: the same double operations, in the same order
@@ -463,12 +481,50 @@ std::size_t countInliers(const float* x, const float* y, const float* nxs, const
   return count;
 }
 
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define DSR_COUNT_INLIERS_AVX2 1
+// countInliersScalar four at a time on a CPU with AVX2: the same double
+// operations in each lane (AVX2 alone, no FMA: no multiply-add is fused),
+// the same count. The rest as countInliersScalar counts it.
+__attribute__((target("avx2"))) std::size_t countInliersAvx2(const float* x, const float* y, const float* nxs,
+                                                              const float* nys, std::size_t n, double qx, double qy,
+                                                              double nx, double ny, double wd, double agree) {
+  std::size_t count = 0, j = 0;
+  const __m256d vqx = _mm256_set1_pd(qx), vqy = _mm256_set1_pd(qy), vnx = _mm256_set1_pd(nx), vny = _mm256_set1_pd(ny);
+  const __m256d vwd = _mm256_set1_pd(wd), vag = _mm256_set1_pd(agree);
+  const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL));
+  for (; j + 4 <= n; j += 4) {
+    const __m256d px = _mm256_cvtps_pd(_mm_loadu_ps(&x[j])), py = _mm256_cvtps_pd(_mm_loadu_ps(&y[j]));
+    const __m256d pnx = _mm256_cvtps_pd(_mm_loadu_ps(&nxs[j])), pny = _mm256_cvtps_pd(_mm_loadu_ps(&nys[j]));
+    const __m256d dist = _mm256_add_pd(_mm256_mul_pd(_mm256_sub_pd(px, vqx), vnx), _mm256_mul_pd(_mm256_sub_pd(py, vqy), vny));
+    const __m256d dot = _mm256_add_pd(_mm256_mul_pd(vnx, pnx), _mm256_mul_pd(vny, pny));
+    const __m256d in = _mm256_and_pd(_mm256_cmp_pd(_mm256_and_pd(dist, abs_mask), vwd, _CMP_LT_OQ),
+                                     _mm256_cmp_pd(_mm256_and_pd(dot, abs_mask), vag, _CMP_GT_OQ));
+    count += static_cast<std::size_t>(__builtin_popcount(static_cast<unsigned>(_mm256_movemask_pd(in))));
+  }
+  // Upper halves of the vector registers cleared before returning to SSE
+  // code: left dirty, every SSE instruction after would wait on them.
+  _mm256_zeroupper();
+  return count + countInliersScalar(x + j, y + j, nxs + j, nys + j, n - j, qx, qy, nx, ny, wd, agree);
+}
+#endif
+
+std::size_t countInliers(const float* x, const float* y, const float* nxs, const float* nys, std::size_t n, double qx,
+                         double qy, double nx, double ny, double wd, double agree) {
+#ifdef DSR_COUNT_INLIERS_AVX2
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  if (avx2) return countInliersAvx2(x, y, nxs, nys, n, qx, qy, nx, ny, wd, agree);
+#endif
+  return countInliersScalar(x, y, nxs, nys, n, qx, qy, nx, ny, wd, agree);
+}
+
 }  // namespace
 
 std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, double floor_z, double height_top,
                                  bool ceiling_known, const Eigen::Vector2d& viewpoint, const Parameters& p,
                                  const ViewTop* view, const OnWall& on_wall) {
   std::vector<int> pool;
+  pool.reserve(points.size());
   for (std::size_t i = 0; i < points.size(); ++i)
     if (std::abs(normals.n[i].z()) < p.vertical_normal_z && points[i].z() > floor_z + 0.05) pool.push_back(static_cast<int>(i));
   std::vector<WallPlane> walls;
@@ -544,30 +600,44 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
       if (best_count * stride < static_cast<std::size_t>(p.min_wall_points)) break;
       // Refine twice by TLS on the inliers.
       std::vector<int> inl;
-      for (int pass = 0; pass < 3; ++pass) {
-        inl.clear();
-        std::vector<Eigen::Vector2d> q2;
-        for (int i : pool) {
+      std::vector<Eigen::Vector2d> q2;
+      inl.reserve(pool.size());
+      q2.reserve(pool.size());
+      // The inliers of pool[j0, j1) in pool order.
+      auto inliersOf = [&](std::size_t j0, std::size_t j1, std::vector<int>& in, std::vector<Eigen::Vector2d>& q) {
+        for (std::size_t j = j0; j < j1; ++j) {
+          const int i = pool[j];
           const Eigen::Vector2d r(points[i].x(), points[i].y());
           if (std::abs((r - best_pt).dot(best_n)) < p.wall_distance &&
               std::abs(best_n.x() * normals.n[i].x() + best_n.y() * normals.n[i].y()) > p.wall_normal_agreement) {
-            inl.push_back(i);
-            q2.push_back(r);
+            in.push_back(i);
+            q.push_back(r);
           }
         }
+      };
+      for (int pass = 0; pass < 3; ++pass) {
+        inl.clear();
+        q2.clear();
+        inliersOf(0, pool.size(), inl, q2);
         if (q2.size() < 3 || pass == 2) break;
         Eigen::Vector2d c, dir;
         fitLine(q2, c, dir);
         best_pt = c;
         best_n = Eigen::Vector2d(-dir.y(), dir.x());
       }
-      // Remove the inliers from the pool whatever becomes of them.
+      // Remove the inliers from the pool whatever becomes of them (they are
+      // a part of it, in its order).
       {
-        std::vector<char> used(points.size(), 0);
-        for (int i : inl) used[i] = 1;
         std::vector<int> rest;
-        for (int i : pool)
-          if (!used[i]) rest.push_back(i);
+        rest.reserve(pool.size());
+        std::size_t k = 0;
+        for (int i : pool) {
+          if (k < inl.size() && inl[k] == i) {
+            ++k;
+            continue;
+          }
+          rest.push_back(i);
+        }
         pool.swap(rest);
       }
       const Eigen::Vector2d dir(best_n.y(), -best_n.x());
@@ -615,7 +685,6 @@ std::vector<std::vector<int>> growRegions(const Points& points, const Normals& n
   util::radixSortBy(order, [&](int c) { return static_cast<std::uint64_t>(util::orderedBits(curv[c])); });
   std::vector<int> label(cells, -1);
   std::vector<std::vector<int>> regions;
-  std::vector<std::uint32_t> nbs;
   std::vector<int> members, stack, region;
   for (int seed : order) {
     if (label[seed] != -1) continue;
@@ -626,14 +695,13 @@ std::vector<std::vector<int>> growRegions(const Points& points, const Normals& n
     while (!stack.empty()) {
       const int cur = stack.back();
       stack.pop_back();
-      grid.neighbourCells(static_cast<std::size_t>(cur), 1, nbs);
-      for (std::uint32_t nb : nbs) {
-        if (!live[nb] || label[nb] != -1) continue;
-        if (std::abs(cn[cur].dot(cn[nb])) < cos_thr) continue;
+      grid.forEachNeighbourCell(static_cast<std::size_t>(cur), [&](std::uint32_t nb) {
+        if (!live[nb] || label[nb] != -1) return;
+        if (std::abs(cn[cur].dot(cn[nb])) < cos_thr) return;
         label[nb] = id;
         members.push_back(static_cast<int>(nb));
         if (curv[nb] <= p.region_curvature) stack.push_back(static_cast<int>(nb));
-      }
+      });
     }
     region.clear();
     for (int c : members)

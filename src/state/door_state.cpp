@@ -44,6 +44,8 @@ double fastAtan2Deg(double y, double x) {
   return a * (180 / M_PI);
 }
 constexpr double kBearingSlackDeg = 0.01;
+// A ray is tested outright at this many angles needed or fewer, its arc not worked out.
+constexpr int kOutrightAngles = 6;
 
 // An upper bound of asin(x), x in [0, 1], within 2% for x <= 0.5: asin's
 // series x + x^3/6 + 3x^5/40 + ... has no coefficient above 1/6 after the
@@ -211,23 +213,37 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     const double lam = std::clamp((dc - vsd).dot(r) / len2, 0.0, 1.0);
     return !((vsd + lam * r - dc).norm() > reach + Lmax);
   };
-  auto gatherRays = [&] {
-    for (const auto& q : points) {
+  // The rays in kRayParts parts of the points (tasks), joined in order.
+  constexpr int kRayParts = 3;
+  std::vector<std::vector<Ray>> ray_parts(kRayParts);
+  auto gatherRayPart = [&](int k) {
+    const std::size_t i0 = points.size() * k / kRayParts, i1 = points.size() * (k + 1) / kRayParts;
+    ray_parts[k].reserve(i1 - i0);  // only what is used is touched
+    for (std::size_t i = i0; i < i1; ++i) {
+      const auto& q = points[i];
       Eigen::Vector2d qsd;
       double len2;
-      if (nearDoorway(q, qsd, len2)) rays.push_back({qsd, q.z(), std::sqrt(len2)});
+      if (nearDoorway(q, qsd, len2)) ray_parts[k].push_back({qsd, q.z(), std::sqrt(len2)});
     }
-    // Enough rays to see free space at 5 cm x 10 cm cells; more only cost time.
-    if (rays.size() > 15000) {
-      const std::size_t stride = (rays.size() + 14999) / 15000;
-      std::vector<Ray> thin;
-      for (std::size_t i = 0; i < rays.size(); i += stride) thin.push_back(rays[i]);
-      rays.swap(thin);
+  };
+  // Joined, every stride-th kept: enough rays to see free space at 5 cm x
+  // 10 cm cells; more only cost time.
+  auto joinRays = [&] {
+    std::size_t total = 0;
+    for (const auto& part : ray_parts) total += part.size();
+    const std::size_t stride = total > 15000 ? (total + 14999) / 15000 : 1;
+    rays.reserve((total + stride - 1) / stride);
+    std::size_t at = 0;  // index in the joined list of the part's first ray
+    for (auto& part : ray_parts) {
+      for (std::size_t i = (stride - at % stride) % stride; i < part.size(); i += stride) rays.push_back(part[i]);
+      at += part.size();
+      std::vector<Ray>().swap(part);
     }
   };
   const bool rays_needed = closed_band_only_above <= 0;
   if (rays_needed) {
-    forEachTask(2, [&](std::size_t i) { i == 0 ? gatherPoints() : gatherRays(); });
+    forEachTask(1 + kRayParts, [&](std::size_t i) { i == 0 ? gatherPoints() : gatherRayPart(static_cast<int>(i) - 1); });
+    joinRays();
   } else {
     gatherPoints();
   }
@@ -250,7 +266,10 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     fit.best_coverage = band_cov;
     return fit;
   }
-  if (!rays_needed) gatherRays();
+  if (!rays_needed) {
+    forEachTask(kRayParts, [&](std::size_t k) { gatherRayPart(static_cast<int>(k)); });
+    joinRays();
+  }
 
   // Exhaustive search over hinge side, swing side and angle: cells of the
   // leaf holding points (support) against cells rays went through (contradiction).
@@ -352,9 +371,10 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       forArc(w, c - below, c + above, test);
     }
   };
-  auto scoreRays = [&](HingeRun& w, const std::vector<char>* need) {
-    std::vector<char> blocked(w.count * cells, 0);  // per angle: leaf bin x z bin
-    w.con.assign(static_cast<std::size_t>(w.count) * na_max, 0);
+  // The cells (per angle: leaf bin x z bin) that rays [r0, r1) go through,
+  // marked in blocked; the count of each leaf bin's is its contradiction.
+  auto markRays = [&](const HingeRun& w, const std::vector<char>* need, std::size_t r0, std::size_t r1,
+                      std::vector<char>& blocked) {
     // The angles needed lie in [first, last]: a test outside would return at once.
     int first = 0, last = w.count - 1;
     if (need) {
@@ -365,7 +385,13 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     std::vector<Eigen::Vector2d> E, K, P;
     axes(w, E, K, P);
     const Eigen::Vector2d H(w.s_h, w.d_h);
-    for (const Ray& ray : rays) {
+    // With few angles needed a ray on the chord is tested at each of them
+    // outright: cheaper than working out its arc (the test decides either way).
+    int needed = 0;
+    for (int ai = first; ai <= last; ++ai) needed += !need || (*need)[ai];
+    const bool outright = needed <= kOutrightAngles;
+    for (std::size_t ri = r0; ri < r1; ++ri) {
+      const Ray& ray = rays[ri];
       // The part of the ray that counts: from the sensor to 6 cm before its point.
       const Eigen::Vector2d A = vsd, B = ray.q - (0.06 / ray.len) * (ray.q - vsd);
       const Eigen::Vector2d u = B - A, w0 = A - H;
@@ -389,9 +415,12 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
         if (!crossLeaf(vsd, r, vsz, dz, lam_max, P[ai], E[ai], a, z) || a < 0.05 || a >= Lmax || z < z0 || z >= z1)
           return;
         const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
-        char& f = blocked[ai * cells + static_cast<std::size_t>(ab) * nz + std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
-        if (!f) f = 1, ++w.con[static_cast<std::size_t>(ai) * na_max + ab];
+        blocked[ai * cells + static_cast<std::size_t>(ab) * nz + std::min(nz - 1, static_cast<int>((z - z0) / zbin))] = 1;
       };
+      if (outright) {
+        for (int ai = first; ai <= last; ++ai) test(ai);
+        continue;
+      }
       const double tc = std::clamp(-bq / uu, t0, t1);
       const double rho_min = (w0 + tc * u).norm();
       if (rho_min <= std::max(0.05, lt / 2)) {
@@ -409,6 +438,22 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       const double dl = asinAbove(std::min(1.0, lt / 2 / rho_min)) * 180 / M_PI + kBearingSlackDeg;
       forArc(w, lo - kBearingSlackDeg, hi + dl, test, first, last);
     }
+  };
+  // Each leaf bin's contradiction at the angles needed (0 at the others, never read).
+  auto tallyRays = [&](HingeRun& w, const std::vector<char>* need, const std::vector<char>& blocked) {
+    w.con.assign(static_cast<std::size_t>(w.count) * na_max, 0);
+    for (int ai = 0; ai < w.count; ++ai)
+      for (int ab = 0; ab < na_max && (!need || (*need)[ai]); ++ab) {
+        const char* b = &blocked[ai * cells + static_cast<std::size_t>(ab) * nz];
+        int n = 0;
+        for (int zb = 0; zb < nz; ++zb) n += b[zb];
+        w.con[static_cast<std::size_t>(ai) * na_max + ab] = n;
+      }
+  };
+  auto scoreRays = [&](HingeRun& w, const std::vector<char>* need) {
+    std::vector<char> blocked(w.count * cells, 0);
+    markRays(w, need, 0, rays.size(), blocked);
+    tallyRays(w, need, blocked);
   };
   auto finishScores = [&](HingeRun& w, const std::vector<char>* need) {
     w.scores.assign(w.count, Score());
@@ -585,7 +630,14 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     HingeRun probe = global[bi];
     std::vector<char> only(probe.count, 0);
     only[ba] = 1;
-    scoreRays(probe, &only);
+    // Its rays in two halves at once, the cells they block joined.
+    std::vector<char> blocked(probe.count * cells, 0), blocked2(probe.count * cells, 0);
+    const std::size_t mid = rays.size() / 2;
+    forEachTask(2, [&](std::size_t h) {
+      markRays(probe, &only, h == 0 ? 0 : mid, h == 0 ? mid : rays.size(), h == 0 ? blocked : blocked2);
+    });
+    for (std::size_t k = 0; k < blocked.size(); ++k) blocked[k] |= blocked2[k];
+    tallyRays(probe, &only, blocked);
     finishScores(probe, &only);
     lower = probe.scores[ba].score;
   }

@@ -31,6 +31,8 @@ class NeighbourGrid {
   // Points of cell c, as indices into the points the grid was built on.
   const int* cellBegin(std::size_t c) const { return order_.data() + begin_[c]; }
   const int* cellEnd(std::size_t c) const { return order_.data() + begin_[c + 1]; }
+  // The points of cell c as stored, in cellBegin's order: point(*(cellBegin(c) + k)) is cellPoints(c)[k].
+  const Eigen::Vector3f* cellPoints(std::size_t c) const { return pos_.data() + begin_[c]; }
   // The point of index i as stored (in the frame the grid was built in).
   const Eigen::Vector3f& point(int i) const { return pos_[slot_[i]]; }
 
@@ -39,6 +41,43 @@ class NeighbourGrid {
   void within(int i, float r, std::vector<int>& idx, std::vector<float>& d2) const;
   // The occupied cells of the (2 ring + 1)^3 block around c, c included.
   void neighbourCells(std::size_t c, int ring, std::vector<std::uint32_t>& cells) const;
+  // f(o) for each cell neighbourCells(c, 1, ...) lists, in its order, without the list.
+  template <class F>
+  void forEachNeighbourCell(std::size_t c, const F& f) const {
+    const Eigen::Vector3i& k = coord_[c];
+    if (dense_.empty()) {
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const std::uint32_t o = findCell(k.x() + dx, k.y() + dy, k.z() + dz);
+            if (o != preprocess::CellMap::kNone) f(o);
+          }
+      return;
+    }
+    // As neighbourCells walks the dense index: a row of coarse cells at a time.
+    std::size_t ox[3], oy[3], oz[3];
+    int px[3], pyz[3][3];
+    for (int d = -1; d <= 1; ++d) {
+      const int x = k.x() + d, y = k.y() + d, z = k.z() + d;
+      ox[d + 1] = static_cast<std::size_t>(half(x) - lo_.x());
+      oy[d + 1] = static_cast<std::size_t>(half(y) - lo_.y()) * dims_.x();
+      oz[d + 1] = static_cast<std::size_t>(half(z) - lo_.z()) * dims_.y() * dims_.x();
+      px[d + 1] = x & 1;
+    }
+    for (int iz = 0; iz < 3; ++iz)
+      for (int iy = 0; iy < 3; ++iy) pyz[iz][iy] = 2 * ((k.y() + iy - 1) & 1) + 4 * ((k.z() + iz - 1) & 1);
+    for (int iz = 0; iz < 3; ++iz)
+      for (int iy = 0; iy < 3; ++iy) {
+        const std::size_t row = oz[iz] + oy[iy];
+        const int parity_yz = pyz[iz][iy];
+        for (int ix = 0; ix < 3; ++ix) {
+          const std::uint32_t kc = dense_[row + ox[ix]];
+          if (kc == preprocess::CellMap::kNone) continue;
+          const std::uint32_t o = children_[8 * static_cast<std::size_t>(kc) + px[ix] + parity_yz];
+          if (o != preprocess::CellMap::kNone) f(o);
+        }
+      }
+  }
 
   // Coarse cells (twice the edge: cell coordinates halved, rounded down),
   // indexed densely over their bounding box when that box is small (and
