@@ -265,13 +265,8 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   if (with_reconstruction) {
     std::vector<reconstruction::WallPatch> patches;
     for (const auto& w : walls) patches.push_back({w.point, w.direction, w.s_min, w.s_max, floor_z, top_z});
-    res.reconstruction = reconstruction::reconstruct(patches, door_stage.openings, p.reconstruction_spacing);
-    for (auto& q : res.reconstruction.points) {
-      const Eigen::Vector3f v = R.transpose() * Eigen::Vector3f(q.x, q.y, q.z);
-      q.x = v.x();
-      q.y = v.y();
-      q.z = v.z();
-    }
+    res.reconstruction =
+        reconstruction::reconstruct(patches, door_stage.openings, p.reconstruction_spacing, R.transpose());
     watch.mark("reconstruction");
   }
   watch.total();

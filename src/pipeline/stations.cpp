@@ -11,6 +11,7 @@
 
 #include "door_state_recognition/pipeline/pipeline.hpp"
 #include "door_state_recognition/preprocess/preprocess.hpp"
+#include "door_state_recognition/recognition/recognition.hpp"
 #include "door_state_recognition/reconstruction/reconstruction.hpp"
 
 namespace dsr {
@@ -51,10 +52,8 @@ void unionCorners(WallResult& into, const WallResult& other, const Eigen::Matrix
       lo = lo.cwiseMin(q);
       hi = hi.cwiseMax(q);
     }
-  for (int k = 0; k < 8; ++k) {
-    const Eigen::Vector3d q((k & 1) ? hi.x() : lo.x(), (k & 2) ? hi.y() : lo.y(), (k & 4) ? hi.z() : lo.z());
-    into.corners[k] = Rt * (q.x() * e1 + q.y() * e2 + q.z() * e3);
-  }
+  into.corners = recognition::boxCorners(lo, hi, e1, e2, e3);
+  for (Eigen::Vector3d& c : into.corners) c = Rt * c;
 }
 
 // Which of two reports of one door to keep: a leaf measured over one whose
@@ -260,14 +259,8 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
       openings.push_back({static_cast<int>(*d.wall_id), s - d.width / 2, s + d.width / 2, c.z() + d.height,
                           h.head<2>(), leaf / len, len, h.z(), top.z()});
     }
-    res.reconstruction = reconstruction::reconstruct(patches, openings, params_.reconstruction_spacing);
-    const Eigen::Matrix3f Rt = R.transpose().cast<float>();
-    for (auto& q : res.reconstruction.points) {
-      const Eigen::Vector3f v = Rt * Eigen::Vector3f(q.x, q.y, q.z);
-      q.x = v.x();
-      q.y = v.y();
-      q.z = v.z();
-    }
+    res.reconstruction = reconstruction::reconstruct(patches, openings, params_.reconstruction_spacing,
+                                                     R.transpose().cast<float>());
   }
   res.timing_ms.emplace_back("total",
                              std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());

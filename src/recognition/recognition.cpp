@@ -46,11 +46,18 @@ BoxCorners boundingBox(const Points& points, const std::vector<int>& idx) {
   b.height = b.extents.z();
   const Eigen::Vector3d c = (lo + hi) / 2;
   b.center = c.x() * e1 + c.y() * e2 + c.z() * e3;
+  b.corners = boxCorners(lo, hi, e1, e2, e3);
+  return b;
+}
+
+std::array<Eigen::Vector3d, 8> boxCorners(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const Eigen::Vector3d& e1,
+                                          const Eigen::Vector3d& e2, const Eigen::Vector3d& e3) {
+  std::array<Eigen::Vector3d, 8> corners;
   for (int k = 0; k < 8; ++k) {
     const Eigen::Vector3d q((k & 1) ? hi.x() : lo.x(), (k & 2) ? hi.y() : lo.y(), (k & 4) ? hi.z() : lo.z());
-    b.corners[k] = q.x() * e1 + q.y() * e2 + q.z() * e3;
+    corners[k] = q.x() * e1 + q.y() * e2 + q.z() * e3;
   }
-  return b;
+  return corners;
 }
 
 std::vector<char> boundaryPoints(const Points& points, const segmentation::Normals& normals,

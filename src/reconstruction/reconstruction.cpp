@@ -6,13 +6,16 @@ namespace dsr {
 namespace reconstruction {
 
 pcl::PointCloud<pcl::PointXYZL> reconstruct(const std::vector<WallPatch>& walls,
-                                            const std::vector<Opening>& openings, double spacing) {
+                                            const std::vector<Opening>& openings, double spacing,
+                                            const Eigen::Matrix3f& to_output) {
   pcl::PointCloud<pcl::PointXYZL> out;
   auto add = [&](const Eigen::Vector2d& xy, double z, std::uint32_t label) {
+    const Eigen::Vector3f v =
+        to_output * Eigen::Vector3f(static_cast<float>(xy.x()), static_cast<float>(xy.y()), static_cast<float>(z));
     pcl::PointXYZL q;
-    q.x = static_cast<float>(xy.x());
-    q.y = static_cast<float>(xy.y());
-    q.z = static_cast<float>(z);
+    q.x = v.x();
+    q.y = v.y();
+    q.z = v.z();
     q.label = label;
     out.push_back(q);
   };

@@ -27,6 +27,10 @@ struct BoxCorners {
 // to a coordinate axis (within 2 deg), otherwise an OBB whose axes are the
 // PCA axes made orthonormal by Gram-Schmidt. Heights are along z.
 BoxCorners boundingBox(const Points& points, const std::vector<int>& indices);
+// The eight corners (bottom four, then top four) of the box [lo, hi] along
+// the axes e1, e2, e3, in the frame of the axes.
+std::array<Eigen::Vector3d, 8> boxCorners(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const Eigen::Vector3d& e1,
+                                          const Eigen::Vector3d& e2, const Eigen::Vector3d& e3);
 
 // Paper 3.3.1: a point is on the boundary when the largest angular gap
 // between the projections of its k neighbours onto its tangent plane exceeds

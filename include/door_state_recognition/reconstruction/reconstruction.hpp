@@ -24,9 +24,11 @@ struct Opening {         // a doorway in a wall, and its leaf as it stands
   double leaf_length, leaf_bottom, leaf_top;
 };
 
-// Label 1: wall, 2: leaf. Points `spacing` apart.
+// Label 1: wall, 2: leaf. Points `spacing` apart, each turned by
+// `to_output` (levelled frame -> the input's) as it is made.
 pcl::PointCloud<pcl::PointXYZL> reconstruct(const std::vector<WallPatch>& walls,
-                                            const std::vector<Opening>& openings, double spacing);
+                                            const std::vector<Opening>& openings, double spacing,
+                                            const Eigen::Matrix3f& to_output = Eigen::Matrix3f::Identity());
 
 }  // namespace reconstruction
 }  // namespace dsr
