@@ -4,7 +4,7 @@ each, scores every report against its truth with door_state_eval, and prints
 the merged figures as JSON (plus one line per scene with --verbose).
 
   scripts/eval_sweep.py [--sensor tls|rgbd] [--scenes N] [--first-seed S]
-                        [--points N] [--viewpoints K] [--up AXIS] [--config FILE] [--jobs J]
+                        [--points N] [--viewpoints K] [--beyond-doors] [--up AXIS] [--config FILE] [--jobs J]
                         [--verbose] [--out DIR]
 """
 import argparse, json, os, subprocess, sys, tempfile
@@ -20,11 +20,12 @@ def one(args, seed, out):
            "--out", str(prefix), "--formats", "pcd,json"]
     if args.sensor == "tls":
         sim += ["--points", str(args.points), "--noise", str(args.noise), "--viewpoints", str(args.viewpoints)]
+        sim += ["--beyond-doors"] if args.beyond_doors else []
     subprocess.run(sim, check=True)
     up = args.up or ("-y" if args.sensor == "rgbd" else "+z")
     # Several scan positions: each station's own file (with its VIEWPOINT), as a survey delivers them.
-    inputs = ([f"{prefix}.station{k}.pcd" for k in range(args.viewpoints)] if args.sensor == "tls" and args.viewpoints > 1
-              else [f"{prefix}.pcd"])
+    stations = len(json.load(open(f"{prefix}.json"))["sensor_origins"]) if args.sensor == "tls" else 1
+    inputs = [f"{prefix}.station{k}.pcd" for k in range(stations)] if stations > 1 else [f"{prefix}.pcd"]
     config = ["--config", args.config] if args.config else []
     subprocess.run([str(BIN / "door_state_cli"), "--quiet", "--up", up, "--json", f"{prefix}.report.json"] + config + inputs,
                    check=True)
@@ -41,6 +42,8 @@ def main():
     ap.add_argument("--noise", type=float, default=0.005)
     ap.add_argument("--viewpoints", type=int, default=1,
                     help="TLS scan positions; above 1 the CLI gets each station's scan as its own file")
+    ap.add_argument("--beyond-doors", action="store_true",
+                    help="TLS: one more station in the room behind each door (door_scene_sim --beyond-doors)")
     ap.add_argument("--up", default=None)
     ap.add_argument("--config", default=None, help="parameters YAML passed to door_state_cli")
     ap.add_argument("--jobs", type=int, default=2)
@@ -72,7 +75,7 @@ def main():
                                      "angle_lower_bounds", "hinge_error_median_m"]}
     summary.update(sensor=args.sensor, first_seed=args.first_seed)
     if args.sensor == "tls":
-        summary.update(points=args.points, viewpoints=args.viewpoints)
+        summary.update(points=args.points, viewpoints=args.viewpoints, beyond_doors=args.beyond_doors)
     print(json.dumps(summary, indent=1))
 
 if __name__ == "__main__":

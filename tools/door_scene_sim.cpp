@@ -36,6 +36,9 @@ options:
   --viewpoints K         TLS scan positions (default 1); with K > 1 and pcd, each
                          position's scan is also written to PREFIX.stationI.pcd
                          (same frame, VIEWPOINT = the position)
+  --beyond-doors         TLS: one more scan position in the room behind each
+                         door, 1.2-2 m beyond it (as a surveyor walks through;
+                         the rays still total --points)
   --noise M              TLS range noise sigma in metres (default 0.005);
                          RGB-D: 0 switches the depth noise model off
   --dropout P            probability of a lost return (default TLS 0, RGB-D 0.02)
@@ -96,6 +99,7 @@ int main(int argc, char** argv) {
         if (n < 100 || n > 100000000) throw UsageError("--points must lie in [100, 1e8]");
         tls.points = static_cast<std::size_t>(n);
       } else if (a == "--viewpoints") tls.viewpoints = static_cast<int>(toInt(a, value()));
+      else if (a == "--beyond-doors") tls.beyond_doors = true;
       else if (a == "--noise") {
         const double m = toDouble(a, value());
         if (m < 0 || m >= 1) throw UsageError("--noise must lie in [0, 1) m");

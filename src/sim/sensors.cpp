@@ -96,6 +96,25 @@ Eigen::Vector3d freePoint(const Scene& scene, RayRandom& rnd, double margin, dou
   throw std::invalid_argument("sensor: no free position for the sensor in this room");
 }
 
+// A scan position in the room behind a door, as a surveyor sets one up after
+// walking through: 1.2-2.0 m beyond the wall, within a third of the doorway's
+// width of its axis, clear of every box and of the leaf's swing.
+Eigen::Vector3d beyondDoor(const Scene& scene, const DoorTruth& door, RayRandom& rnd) {
+  const WallTruth& wall = scene.walls[door.wall];
+  const double t = scene.spec.wall_thickness;
+  for (int attempt = 0; attempt < 5000; ++attempt) {
+    const double depth = 1.2 + 0.8 * rnd.uniform(), side = (rnd.uniform() - 0.5) * 2.0 / 3.0 * door.width;
+    const double z = 1.2 + 0.5 * rnd.uniform();
+    const Eigen::Vector3d p = door.opening_center - wall.normal * (t / 2 + depth) + wall.axis * side + Eigen::Vector3d::UnitZ() * z;
+    bool free = true;
+    for (const Box& b : scene.boxes) free = free && !b.contains(p, 0.3);
+    const Eigen::Vector3d h = p - door.hinge;
+    if (!door.swing_into_room && Eigen::Vector2d(h.x(), h.y()).norm() < door.width + 0.3) free = false;
+    if (free) return p;
+  }
+  throw std::invalid_argument("sensor: no free position beyond a door");
+}
+
 }  // namespace
 
 RayHit castRay(const Scene& scene, const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double max_t) {
@@ -120,15 +139,20 @@ SimulatedCloud scanTls(const Scene& scene, const TlsOptions& o) {
   out.sensor_to_world = Eigen::Translation3d(out.viewpoints_world[0]) *
                         Eigen::AngleAxisd(2 * kPi * placement.uniform(), Eigen::Vector3d::UnitZ());
   const Eigen::Isometry3d world_to_sensor = out.sensor_to_world.inverse();
+  if (o.beyond_doors) {
+    RayRandom beyond(o.seed, 0xD00B, 0);  // its own stream: the positions inside stay as without it
+    for (const DoorTruth& d : scene.doors) out.viewpoints_world.push_back(beyondDoor(scene, d, beyond));
+  }
+  const int n_views = static_cast<int>(out.viewpoints_world.size());
 
   const std::vector<PreparedBox> boxes = prepare(scene);
   const double el0 = o.min_elevation_deg * kPi / 180, el1 = 0.5 * kPi;
-  const double per_view = static_cast<double>(o.points) / o.viewpoints;
+  const double per_view = static_cast<double>(o.points) / n_views;
   const int n_el = std::max(2, static_cast<int>(std::lround(std::sqrt(per_view * (el1 - el0) / (2 * kPi)))));
   const int n_az = std::max(4, static_cast<int>(std::lround(per_view / n_el)));
   const std::size_t per = static_cast<std::size_t>(n_el) * n_az;
 
-  std::vector<pcl::PointXYZL> slots(per * o.viewpoints);
+  std::vector<pcl::PointXYZL> slots(per * n_views);
   std::vector<char> valid(slots.size(), 0);
 #pragma omp parallel for schedule(dynamic, 4096)
   for (long long idx = 0; idx < static_cast<long long>(slots.size()); ++idx) {

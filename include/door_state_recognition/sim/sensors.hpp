@@ -18,6 +18,7 @@ namespace sim {
 struct TlsOptions {
   std::size_t points = 400000;     // rays over all viewpoints (returns are fewer with dropout)
   int viewpoints = 1;              // scan positions inside the room
+  bool beyond_doors = false;       // one more scan position beyond each door, in the room behind it
   double range_sigma = 0.005;      // Gaussian range noise, metres (0: none)
   double dropout = 0.0;            // probability that a return is lost
   double min_elevation_deg = -60;  // below that the tripod hides the floor
