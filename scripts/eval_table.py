@@ -12,7 +12,8 @@ and NAME.log (simulated clouds are deleted).
 
 Names: tls-400k-SEED, tls-100k-SEED, tls-1M-SEED, rgbd-SEED,
 stations3-400k-SEED (three stations of 400k rays each), stations2-400k-SEED;
--bound5- before the seed (tls-400k-bound5-SEED, stations3-400k-bound5-SEED)
+beyond-400k-SEED (one station inside and one beyond each door, 400k rays in
+all); -bound5- before the seed (tls-400k-bound5-SEED, stations3-400k-bound5-SEED)
 runs with unseen_leaf_min_bound_deg 5.
 """
 import json, os, shutil, subprocess, sys, tempfile
@@ -27,7 +28,9 @@ DEFAULT = ([f"tls-400k-{s}" for s in (1000, 2000, 3000, 4000, 5000)] +
            [f"stations3-400k-{s}" for s in (1000, 2000, 3000, 4000, 5000)] +
            [f"stations3-400k-bound5-{s}" for s in (1000, 2000, 3000, 4000, 5000)] +
            [f"stations3-100k-{s}" for s in (1000, 2000, 3000)] + ["stations3-1M-1000"] +
-           [f"tls-400k-bound5-{s}" for s in (1000, 2000, 3000, 4000, 5000)])
+           [f"tls-400k-bound5-{s}" for s in (1000, 2000, 3000, 4000, 5000)] +
+           [f"beyond-400k-{s}" for s in (1000, 2000, 3000, 4000, 5000)] +
+           [f"beyond-100k-{s}" for s in (1000, 2000, 3000)] + ["beyond-1M-1000"])
 RAYS = {"100k": 100000, "400k": 400000, "1M": 1000000}
 
 
@@ -37,6 +40,8 @@ def sweep_args(name, config_dir):
     if parts[0] == "rgbd":
         return ["--sensor", "rgbd", "--first-seed", seed]
     rays = RAYS[parts[1]]
+    if parts[0] == "beyond":  # one station inside, one beyond each door: the rays in total
+        return ["--sensor", "tls", "--beyond-doors", "--points", str(rays), "--first-seed", seed]
     stations = 1 if parts[0] == "tls" else int(parts[0][len("stations"):])
     args = ["--sensor", "tls", "--viewpoints", str(stations), "--points", str(rays * stations), "--first-seed", seed]
     if "bound5" in parts:

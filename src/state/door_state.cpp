@@ -46,6 +46,9 @@ double fastAtan2Deg(double y, double x) {
 constexpr double kBearingSlackDeg = 0.01;
 // A ray is tested outright at this many angles needed or fewer, its arc not worked out.
 constexpr int kOutrightAngles = 6;
+// A leaf whose best hypothesis at the jambs holds points in fewer of its
+// cells is sought with hinges outwards of them too.
+constexpr double kRetryBelowCoverage = 0.5;
 
 // An upper bound of asin(x), x in [0, 1], within 2% for x <= 0.5: asin's
 // series x + x^3/6 + 3x^5/40 + ... has no coefficient above 1/6 after the
@@ -581,12 +584,6 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     });
   };
 
-  // Global search: hinge at either jamb, either swing side, hinge on the
-  // face or set back (recess), every degree. The hinges are scored as tasks
-  // (over the cores), the best taken in order. Support bounds a hypothesis's
-  // score from above (contradiction only lowers it): rays are tested only at
-  // the angles whose bound reaches the exact score of the best-bounded one,
-  // the others cannot be the best.
   // A leaf swung towards the sensor hangs at its recess behind the face,
   // which jambs seen only in part can put deeper than the wall measured
   // there: its recesses go to the default wall thickness at least. Not in
@@ -597,74 +594,98 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   struct Hinge {
     int h, sw;
     double rec;
+    double out = 0;  // the hinge this far outwards of its jamb (away from the doorway)
   };
-  std::vector<Hinge> hinges;
   // A doorway sought from the end of a shadow wider than a door nearer the
   // sensor (Doorway::shadow_end) is there only as the leaf hinged at that
   // end and swung towards the sensor.
   const int shadow_h = std::abs(vsd.x() - door.s0) < std::abs(vsd.x() - door.s1) ? 0 : 1;
-  for (int h = 0; h < 2; ++h)
-    for (int sw = 0; sw < 2; ++sw)
-      for (double rec : recess_steps) {
-        if (rec > 0 && rec + lt > (sw == 0 ? t_toward : t)) continue;
-        if (door.shadow_end && (h != shadow_h || sw != 0)) continue;
-        hinges.push_back({h, sw, rec});
-      }
-  std::vector<HingeRun> global(hinges.size());
-  for (std::size_t i = 0; i < hinges.size(); ++i) {
-    const Hinge& g = hinges[i];
-    HingeRun& w = global[i];
-    w.s_h = g.h == 0 ? door.s0 : door.s1, w.e0 = g.h == 0 ? 1.0 : -1.0;
-    w.m = g.sw == 0 ? 1.0 : -1.0, w.d_h = g.sw == 0 ? -g.rec : -t + g.rec;
-    // Beyond 170 deg a leaf lies flat on its wall and cannot be told from it.
-    w.start = 0.0, w.step = 2.0, w.count = 86;  // every 2 deg, refined below
-  }
-  forEachTask(global.size(), [&](std::size_t i) { scorePoints(global[i]); });
-  double lower = -std::numeric_limits<double>::infinity();  // the exact score of one hypothesis
-  if (!global.empty()) {
-    std::size_t bi = 0;
-    int ba = 0, bb = -1;
-    for (std::size_t i = 0; i < global.size(); ++i)
-      for (int ai = 0; ai < global[i].count; ++ai)
-        if (bound(global[i], ai) > bb) bb = bound(global[i], ai), bi = i, ba = ai;
-    HingeRun probe = global[bi];
-    std::vector<char> only(probe.count, 0);
-    only[ba] = 1;
-    // Its rays in two halves at once, the cells they block joined.
-    std::vector<char> blocked(probe.count * cells, 0), blocked2(probe.count * cells, 0);
-    const std::size_t mid = rays.size() / 2;
-    forEachTask(2, [&](std::size_t h) {
-      markRays(probe, &only, h == 0 ? 0 : mid, h == 0 ? mid : rays.size(), h == 0 ? blocked : blocked2);
-    });
-    for (std::size_t k = 0; k < blocked.size(); ++k) blocked[k] |= blocked2[k];
-    tallyRays(probe, &only, blocked);
-    finishScores(probe, &only);
-    lower = probe.scores[ba].score;
-  }
-  forEachTask(global.size(), [&](std::size_t i) {
-    HingeRun& w = global[i];
-    std::vector<char> need(w.count, 0);
-    bool any = false;
-    for (int ai = 0; ai < w.count; ++ai) any |= (need[ai] = bound(w, ai) >= lower) != 0;
-    // A hinge none of whose angles can be the best needs no rays at all
-    // (most hinges: the bound leaves a few dozen of a thousand hypotheses).
-    if (any) {
-      scoreRays(w, &need);
-    } else {
-      w.con.assign(static_cast<std::size_t>(w.count) * na_max, 0);
-    }
-    finishScores(w, &need);
-  });
+  auto hingesAt = [&](double out) {
+    std::vector<Hinge> hs;
+    for (int h = 0; h < 2; ++h)
+      for (int sw = 0; sw < 2; ++sw)
+        for (double rec : recess_steps) {
+          if (rec > 0 && rec + lt > (sw == 0 ? t_toward : t)) continue;
+          if (door.shadow_end && (h != shadow_h || sw != 0)) continue;
+          hs.push_back({h, sw, rec, out});
+        }
+    return hs;
+  };
   Score best;
   int best_h = 0, best_sw = 0;
   double best_deg = 0, best_recess = 0, best_s = door.s0;
-  for (std::size_t i = 0; i < hinges.size(); ++i) {
-    const Hinge& g = hinges[i];
-    for (int ai = 0; ai < 86; ++ai) {
-      const Score& sc = global[i].scores[ai];
-      if (sc.score > best.score)
-        best = sc, best_h = g.h, best_sw = g.sw, best_deg = 2.0 * ai, best_recess = g.rec, best_s = g.h == 0 ? door.s0 : door.s1;
+  // The hinges hs over every 2 deg; the best replaced by a hypothesis that
+  // scores more. `lower`: the exact score of a hypothesis already scored
+  // (rays are tested only where support could beat it).
+  auto globalSearch = [&](const std::vector<Hinge>& hinges, double lower) {
+    std::vector<HingeRun> global(hinges.size());
+    for (std::size_t i = 0; i < hinges.size(); ++i) {
+      const Hinge& g = hinges[i];
+      HingeRun& w = global[i];
+      w.s_h = g.h == 0 ? door.s0 - g.out : door.s1 + g.out, w.e0 = g.h == 0 ? 1.0 : -1.0;
+      w.m = g.sw == 0 ? 1.0 : -1.0, w.d_h = g.sw == 0 ? -g.rec : -t + g.rec;
+      // Beyond 170 deg a leaf lies flat on its wall and cannot be told from it.
+      w.start = 0.0, w.step = 2.0, w.count = 86;  // every 2 deg, refined below
     }
+    forEachTask(global.size(), [&](std::size_t i) { scorePoints(global[i]); });
+    if (!global.empty() && !std::isfinite(lower)) {
+      std::size_t bi = 0;
+      int ba = 0, bb = -1;
+      for (std::size_t i = 0; i < global.size(); ++i)
+        for (int ai = 0; ai < global[i].count; ++ai)
+          if (bound(global[i], ai) > bb) bb = bound(global[i], ai), bi = i, ba = ai;
+      HingeRun probe = global[bi];
+      std::vector<char> only(probe.count, 0);
+      only[ba] = 1;
+      // Its rays in two halves at once, the cells they block joined.
+      std::vector<char> blocked(probe.count * cells, 0), blocked2(probe.count * cells, 0);
+      const std::size_t mid = rays.size() / 2;
+      forEachTask(2, [&](std::size_t h) {
+        markRays(probe, &only, h == 0 ? 0 : mid, h == 0 ? mid : rays.size(), h == 0 ? blocked : blocked2);
+      });
+      for (std::size_t k = 0; k < blocked.size(); ++k) blocked[k] |= blocked2[k];
+      tallyRays(probe, &only, blocked);
+      finishScores(probe, &only);
+      lower = probe.scores[ba].score;
+    }
+    forEachTask(global.size(), [&](std::size_t i) {
+      HingeRun& w = global[i];
+      std::vector<char> need(w.count, 0);
+      bool any = false;
+      for (int ai = 0; ai < w.count; ++ai) any |= (need[ai] = bound(w, ai) >= lower) != 0;
+      // A hinge none of whose angles can be the best needs no rays at all
+      // (most hinges: the bound leaves a few dozen of a thousand hypotheses).
+      if (any) {
+        scoreRays(w, &need);
+      } else {
+        w.con.assign(static_cast<std::size_t>(w.count) * na_max, 0);
+      }
+      finishScores(w, &need);
+    });
+    for (std::size_t i = 0; i < hinges.size(); ++i) {
+      const Hinge& g = hinges[i];
+      for (int ai = 0; ai < 86; ++ai) {
+        const Score& sc = global[i].scores[ai];
+        if (sc.score > best.score)
+          best = sc, best_h = g.h, best_sw = g.sw, best_deg = 2.0 * ai, best_recess = g.rec, best_s = global[i].s_h;
+      }
+    }
+  };
+  // Global search: hinge at either jamb, either swing side, hinge on the
+  // face or set back (recess), every degree. The hinges are scored as tasks
+  // (over the cores), the best taken in order. Support bounds a hypothesis's
+  // score from above (contradiction only lowers it): rays are tested only at
+  // the angles whose bound reaches the exact score of the best-bounded one,
+  // the others cannot be the best.
+  globalSearch(hingesAt(0.0), -std::numeric_limits<double>::infinity());
+  // A leaf ajar hides the jamb at its hinge from a sensor on its swing side
+  // (its shadow falls beside the doorway): the doorway seen ends short of
+  // the hinge, and no angle at that jamb fits the leaf. Where the best fits
+  // poorly and no trim pair fixes the jambs, hinges 10 and 20 cm outwards too.
+  if (!door.paired && best.bins > 0 && best.cells < kRetryBelowCoverage * best.bins * nz) {
+    std::vector<Hinge> more = hingesAt(0.1), far = hingesAt(0.2);
+    more.insert(more.end(), far.begin(), far.end());
+    globalSearch(more, best.score);
   }
   // Local search: the jamb seen from the wall can be off where a leaf hides
   // or shadows its own doorway; move the hinge along the wall and the angle.
