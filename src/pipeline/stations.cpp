@@ -27,6 +27,8 @@ constexpr double kSameDoor = 0.45;  // m
 // doorways side by side at most touch; a leaf fitted from the wrong jamb,
 // or a doorway taken in its leaf's shadow, overlaps the true one).
 constexpr double kSameDoorOverlap = 0.1;  // m
+// Two parallel walls this close are the two faces of one wall (for doors).
+constexpr double kWallFaces = 0.4;  // m
 
 struct Line2 {  // a wall in the levelled frame
   Eigen::Vector2d point, dir;
@@ -186,6 +188,7 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
   for (std::size_t m = 0; m < res.walls.size(); ++m) res.walls[m].id = static_cast<int>(m);
 
   // Doors: one per doorway, the best report of it.
+  std::vector<DoorResult> reports;
   for (std::size_t k = 0; k < runs.size(); ++k)
     for (DoorResult d : runs[k].doors) {
       if (d.wall_id) d.wall_id = wall_map[k][*d.wall_id];
@@ -193,24 +196,66 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
       if (d.swing != Swing::Unknown)
         d.swing = (stations[0].viewpoint - d.opening_center).dot(d.wall_normal) > 0 ? Swing::TowardViewer
                                                                                     : Swing::AwayFromViewer;
-      // One doorway: centres close, or on one wall with the doorways
-      // overlapping (a leaf's shadow beside its doorway, taken from another
-      // station for a doorway of its own, overlaps the true one: 5023).
-      auto span = [&](const DoorResult& x) {
-        const Line2& L = lines[*x.wall_id];
-        const double c = ((R * x.opening_center).head<2>() - L.point).dot(L.dir);
-        return std::make_pair(c - x.width / 2, c + x.width / 2);
-      };
-      auto same = std::find_if(res.doors.begin(), res.doors.end(), [&](const DoorResult& o) {
-        if ((o.opening_center - d.opening_center).norm() < kSameDoor) return true;
-        if (!o.wall_id || !d.wall_id || *o.wall_id != *d.wall_id) return false;
-        const auto [a0, a1] = span(o);
-        const auto [b0, b1] = span(d);
-        return std::min(a1, b1) - std::max(a0, b0) > kSameDoorOverlap;
-      });
-      if (same == res.doors.end()) res.doors.push_back(d);
-      else if (better(d, *same)) *same = d;
+      reports.push_back(d);
     }
+  // One doorway: centres close, or the doorways overlapping along one wall,
+  // or along the two faces of one wall (parallel, up to kWallFaces apart: a
+  // station beyond a door sees the wall's other face). A leaf's shadow
+  // beside its doorway, or a leaf fitted from the wrong jamb, taken from
+  // another station for a doorway of its own, overlaps the true one (5023,
+  // 1011 seen from beyond a door).
+  auto same = [&](const DoorResult& o, const DoorResult& d) {
+    if ((o.opening_center - d.opening_center).norm() < kSameDoor) return true;
+    if (!o.wall_id || !d.wall_id) return false;
+    const Line2 &Lo = lines[*o.wall_id], &Ld = lines[*d.wall_id];
+    if (std::abs(Lo.dir.dot(Ld.dir)) < kWallParallelCos) return false;
+    const Eigen::Vector2d n(-Lo.dir.y(), Lo.dir.x());
+    if (std::abs((Ld.point - Lo.point).dot(n)) > kWallFaces) return false;
+    auto span = [&](const DoorResult& x) {
+      const double c = ((R * x.opening_center).head<2>() - Lo.point).dot(Lo.dir);
+      return std::make_pair(c - x.width / 2, c + x.width / 2);
+    };
+    const auto [a0, a1] = span(o);
+    const auto [b0, b1] = span(d);
+    return std::min(a1, b1) - std::max(a0, b0) > kSameDoorOverlap;
+  };
+  // Each report joins the first door one of whose reports it is the same
+  // as; doors that a later report made the same are joined until none are.
+  std::vector<std::vector<DoorResult>> groups;
+  for (const DoorResult& d : reports) {
+    auto it = std::find_if(groups.begin(), groups.end(), [&](const std::vector<DoorResult>& g) {
+      return std::any_of(g.begin(), g.end(), [&](const DoorResult& o) { return same(o, d); });
+    });
+    if (it == groups.end()) groups.push_back({d});
+    else it->push_back(d);
+  }
+  auto groupsMeet = [&](const std::vector<DoorResult>& a, const std::vector<DoorResult>& b) {
+    for (const DoorResult& x : a)
+      for (const DoorResult& y : b)
+        if (same(x, y)) return true;
+    return false;
+  };
+  for (bool joined = true; joined;) {
+    joined = false;
+    for (std::size_t m = 0; m < groups.size() && !joined; ++m)
+      for (std::size_t n = m + 1; n < groups.size() && !joined; ++n) {
+        if (!groupsMeet(groups[m], groups[n])) continue;
+        groups[m].insert(groups[m].end(), groups[n].begin(), groups[n].end());
+        groups.erase(groups.begin() + static_cast<long>(n));
+        joined = true;
+      }
+  }
+  // Of each door's reports the best (better()). (A station's free-space
+  // bound is not a hard limit for a leaf measured from another: it assumes
+  // that station's jambs and hinge. Replacing a measured leaf more than 5 deg
+  // below another station's bound by the bound lost four correct doors in
+  // the beyond and stations3 sweeps for one it mended.)
+  for (const std::vector<DoorResult>& g : groups) {
+    const DoorResult* best = &g.front();
+    for (const DoorResult& d : g)
+      if (better(d, *best)) best = &d;
+    res.doors.push_back(*best);
+  }
   res.doors.erase(std::remove_if(res.doors.begin(), res.doors.end(),
                                  [&](const DoorResult& d) {
                                    return d.angle_is_lower_bound &&

@@ -678,13 +678,23 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   // the angles whose bound reaches the exact score of the best-bounded one,
   // the others cannot be the best.
   globalSearch(hingesAt(0.0), -std::numeric_limits<double>::infinity());
-  // A leaf ajar hides the jamb at its hinge from a sensor on its swing side
-  // (its shadow falls beside the doorway): the doorway seen ends short of
-  // the hinge, and no angle at that jamb fits the leaf. Where the best fits
-  // poorly and no trim pair fixes the jambs, hinges 10 and 20 cm outwards too.
-  if (!door.paired && best.bins > 0 && best.cells < kRetryBelowCoverage * best.bins * nz) {
-    std::vector<Hinge> more = hingesAt(0.1), far = hingesAt(0.2);
-    more.insert(more.end(), far.begin(), far.end());
+  // The doorway seen can end short of the hinge or run past it: a leaf
+  // ajar hides the jamb at its hinge from a sensor on its swing side, and a
+  // leaf swung past 90 deg towards the sensor shadows the wall beyond its
+  // hinge, which then looks like doorway. Either way no angle at the jamb
+  // fits the leaf. Where the best fits poorly and no trim pair fixes the
+  // jambs, hinges up to 40 cm outwards and inwards of each jamb too (10 cm
+  // apart, leaving at least the narrowest door between them). Not in a
+  // camera frame: there a leaf is often seen only in part, and hinges moved
+  // off the jambs fitted wrong leaves better (rgbd sweeps 2000 and 3000).
+  if (!view && !door.paired && best.bins > 0 && best.cells < kRetryBelowCoverage * best.bins * nz) {
+    std::vector<Hinge> more;
+    for (int k = -4; k <= 4; ++k) {
+      const double out = 0.1 * k;
+      if (k == 0 || w + std::min(0.0, out) < p.door_min_width) continue;
+      const std::vector<Hinge> at = hingesAt(out);
+      more.insert(more.end(), at.begin(), at.end());
+    }
     globalSearch(more, best.score);
   }
   // Local search: the jamb seen from the wall can be off where a leaf hides
