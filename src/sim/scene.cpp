@@ -205,6 +205,15 @@ Scene buildScene(const RoomSpec& r) {
       leaf.surface = Surface::Leaf;
       leaf.owner = di;
       scene.boxes.push_back(leaf);
+      if (r.handles && lh > 1.2 && lw > 0.35)
+        for (const double side : {1.0, -1.0}) {
+          Box handle;
+          handle.pose = leaf.pose * Eigen::Translation3d(lw / 2 - 0.11, side * (lt / 2 + 0.03), 1.0 - (kBottomGap + lh / 2));
+          handle.half = Eigen::Vector3d(0.06, 0.03, 0.012);
+          handle.surface = Surface::Handle;
+          handle.owner = di;
+          scene.boxes.push_back(handle);
+        }
 
       DoorTruth& g = scene.doors[di];
       g.opening_center = T * f.at(d.center, -t / 2, 0);

@@ -774,6 +774,29 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   const double best_expected = static_cast<double>(best_bins) * nz;
   const double gen_cov = best_support / best_expected;
   const double gen_contra = best_contra / best_expected;
+  // A leaf closed in the wall band fills its doorway either way round: its
+  // hinge side is told by its handle, at the latch edge, standing 3-10 cm
+  // off the visible face about 0.9-1.1 m above the floor. Points there
+  // within 30 cm of one jamb, at least three and three times those at the
+  // other, put the latch at that jamb (else the search's side stands: a
+  // closed leaf's hinge side is a guess without a handle).
+  const bool closed_band = band_cov >= 0.55 && (best_deg < p.closed_below_deg + 3 || gen_cov < band_cov);
+  if (closed_band && band.size() >= 10) {
+    std::vector<double> dv;
+    for (const Local& q : band) dv.push_back(q.d);
+    std::nth_element(dv.begin(), dv.begin() + dv.size() / 2, dv.end());
+    const double face = dv[dv.size() / 2];
+    int near0 = 0, near1 = 0;
+    for (const Local& q : pts) {
+      const double z = points[q.index].z() - floor_z;
+      if (z < 0.9 || z > 1.1 || q.d < face + 0.03 || q.d > face + 0.1) continue;
+      if (q.s > door.s0 + 0.02 && q.s < door.s0 + 0.3) ++near0;
+      if (q.s < door.s1 - 0.02 && q.s > door.s1 - 0.3) ++near1;
+    }
+    fit.handle_points = std::max(near0, near1);
+    if (near0 >= 3 && near0 >= 3 * near1) best_h = 1;       // latch at s0
+    else if (near1 >= 3 && near1 >= 3 * near0) best_h = 0;  // latch at s1
+  }
   fit.best_angle_deg = best_deg;
   fit.best_coverage = gen_cov;
   fit.best_contradiction = gen_contra;
@@ -806,7 +829,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     return static_cast<double>(cells) / (static_cast<double>(nl) * nz);
   };
 
-  if (band_cov >= 0.55 && (best_deg < p.closed_below_deg + 3 || gen_cov < band_cov)) {
+  if (closed_band) {
     fit.found = true;
     fit.closed_in_band = true;
     fit.angle_deg = band_angle;
