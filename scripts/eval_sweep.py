@@ -4,7 +4,7 @@ each, scores every report against its truth with door_state_eval, and prints
 the merged figures as JSON (plus one line per scene with --verbose).
 
   scripts/eval_sweep.py [--sensor tls|rgbd] [--scenes N] [--first-seed S]
-                        [--points N] [--viewpoints K] [--beyond-doors] [--up AXIS] [--config FILE] [--jobs J]
+                        [--points N] [--viewpoints K] [--beyond-doors] [--no-handles] [--up AXIS] [--config FILE] [--jobs J]
                         [--verbose] [--out DIR]
 """
 import argparse, json, os, subprocess, sys, tempfile
@@ -17,7 +17,7 @@ BIN = Path(os.environ["DSR_BIN"]) if os.environ.get("DSR_BIN") else Path(os.envi
 def one(args, seed, out):
     prefix = out / f"{args.sensor}_{seed}"
     sim = [str(BIN / "door_scene_sim"), "--quiet", "--sensor", args.sensor, "--seed", str(seed),
-           "--out", str(prefix), "--formats", "pcd,json"]
+           "--out", str(prefix), "--formats", "pcd,json"] + (["--no-handles"] if args.no_handles else [])
     if args.sensor == "tls":
         sim += ["--points", str(args.points), "--noise", str(args.noise), "--viewpoints", str(args.viewpoints)]
         sim += ["--beyond-doors"] if args.beyond_doors else []
@@ -44,6 +44,7 @@ def main():
                     help="TLS scan positions; above 1 the CLI gets each station's scan as its own file")
     ap.add_argument("--beyond-doors", action="store_true",
                     help="TLS: one more station in the room behind each door (door_scene_sim --beyond-doors)")
+    ap.add_argument("--no-handles", action="store_true", help="leaves without handles (door_scene_sim --no-handles)")
     ap.add_argument("--up", default=None)
     ap.add_argument("--config", default=None, help="parameters YAML passed to door_state_cli")
     ap.add_argument("--jobs", type=int, default=2)

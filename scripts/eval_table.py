@@ -13,7 +13,7 @@ and NAME.log (simulated clouds are deleted).
 Names: tls-400k-SEED, tls-100k-SEED, tls-1M-SEED, rgbd-SEED,
 stations3-400k-SEED (three stations of 400k rays each), stations2-400k-SEED;
 beyond-400k-SEED (one station inside and one beyond each door, 400k rays in
-all); -bound5- before the seed (tls-400k-bound5-SEED, stations3-400k-bound5-SEED)
+all); rgbd-nohandles-SEED (leaves without handles); -bound5- before the seed (tls-400k-bound5-SEED, stations3-400k-bound5-SEED)
 runs with unseen_leaf_min_bound_deg 5.
 """
 import json, os, shutil, subprocess, sys, tempfile
@@ -24,6 +24,7 @@ BUILD = Path(os.environ.get("DSR_BUILD", REPO / "build"))
 DEFAULT = ([f"tls-400k-{s}" for s in (1000, 2000, 3000, 4000, 5000)] +
            [f"tls-100k-{s}" for s in (1000, 2000, 3000)] + ["tls-1M-1000"] +
            [f"rgbd-{s}" for s in (1000, 2000, 3000, 4000, 5000)] +
+           [f"rgbd-nohandles-{s}" for s in (1000, 2000, 3000, 4000, 5000)] +
            [f"stations2-400k-{s}" for s in (1000, 2000, 3000, 4000)] +
            [f"stations3-400k-{s}" for s in (1000, 2000, 3000, 4000, 5000)] +
            [f"stations3-400k-bound5-{s}" for s in (1000, 2000, 3000, 4000, 5000)] +
@@ -38,7 +39,7 @@ def sweep_args(name, config_dir):
     parts = name.split("-")
     seed = parts[-1]
     if parts[0] == "rgbd":
-        return ["--sensor", "rgbd", "--first-seed", seed]
+        return ["--sensor", "rgbd", "--first-seed", seed] + (["--no-handles"] if "nohandles" in parts else [])
     rays = RAYS[parts[1]]
     if parts[0] == "beyond":  # one station inside, one beyond each door: the rays in total
         return ["--sensor", "tls", "--beyond-doors", "--points", str(rays), "--first-seed", seed]

@@ -36,6 +36,7 @@ options:
   --viewpoints K         TLS scan positions (default 1); with K > 1 and pcd, each
                          position's scan is also written to PREFIX.stationI.pcd
                          (same frame, VIEWPOINT = the position)
+  --no-handles           leaves without their lever handles
   --beyond-doors         TLS: one more scan position in the room behind each
                          door, 1.2-2 m beyond it (as a surveyor walks through;
                          the rays still total --points)
@@ -79,6 +80,7 @@ int main(int argc, char** argv) {
   tools::BagOptions bag;
   double angle = -1;
   bool quiet = false;
+  bool handles = true;
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
@@ -100,6 +102,7 @@ int main(int argc, char** argv) {
         tls.points = static_cast<std::size_t>(n);
       } else if (a == "--viewpoints") tls.viewpoints = static_cast<int>(toInt(a, value()));
       else if (a == "--beyond-doors") tls.beyond_doors = true;
+      else if (a == "--no-handles") handles = false;
       else if (a == "--noise") {
         const double m = toDouble(a, value());
         if (m < 0 || m >= 1) throw UsageError("--noise must lie in [0, 1) m");
@@ -140,6 +143,7 @@ int main(int argc, char** argv) {
     sim::RoomSpec spec = scene_name == "random" ? sim::randomRoom(seed, random_options) : sim::paperRoom(scene_name);
     if (angle >= 0)
       for (auto& d : spec.doors) d.angle_deg = angle;
+    spec.handles = handles;
     const sim::Scene scene = sim::buildScene(spec);
     tls.seed = rgbd.seed = seed;
     const sim::SimulatedCloud cloud = sensor == "tls" ? sim::scanTls(scene, tls) : sim::captureRgbd(scene, rgbd);
