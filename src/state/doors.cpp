@@ -16,6 +16,8 @@ namespace {
 // A closed leaf is a door's only evidence when it covers more than this
 // share of its doorway (no trim, see-through or recess).
 constexpr double kClosedBandEvidence = 0.7;
+// A doorway this close to an end of its wall's face reaches that end.
+constexpr double kWallEndSlack = 0.05;  // m
 // A doorway this much hidden by what stands in front of it (share of its
 // body cells) is searched for a leaf swung towards the sensor, which makes it
 // a door when it explains at least kOwnLeafExplained of what hides it.
@@ -233,8 +235,15 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       // closed_below_deg (a band seen too sparsely, far off, to be taken as
       // one whole).
       const bool closed = leaf.closed_in_band || leaf.angle_deg < p.closed_below_deg;
+      // In a camera frame a run to where the wall's face ends (no wall seen
+      // beyond one jamb) holding a "closed leaf" and nothing else is the
+      // wall's own end off a plane tilted by depth noise (rgbd 1001, 2007,
+      // 2015: false closed doors beside real doorways): the band's coverage
+      // alone is no evidence there.
+      const bool at_wall_end = d.s0 <= wall.s_min + kWallEndSlack || d.s1 >= wall.s_max - kWallEndSlack;
+      const bool band_evidence = leaf.coverage > kClosedBandEvidence && !(organized && at_wall_end);
       const bool evidence = d.shadow_end ? own_leaf_hides
-                            : closed ? (d.casing || d.recess > 0.3 || set_back || leaf.coverage > kClosedBandEvidence)
+                            : closed ? (d.casing || d.recess > 0.3 || set_back || band_evidence)
                                      : (d.casing || d.through >= 0.08 || own_leaf_hides);
       // A closed leaf whose foot is hidden by something standing right in
       // front of it is a blocked front, not a door.
