@@ -173,6 +173,31 @@ TEST(NeighbourGrid, DenseAndHashedIndexesAgree) {
   }
 }
 
+// Clouds large enough to be gridded in two halves at once: the dense and
+// hashed indexes still agree cell by cell, point by point.
+TEST(NeighbourGrid, DenseAndHashedIndexesAgreeWhenBuiltInHalves) {
+  const auto pts = randomPoints(17, 60000, 0.4f, Eigen::Vector3f(1, -2, 0.5f));
+  auto far = pts;
+  far.push_back(Eigen::Vector3f(-5000, 4000, 300));
+  const segmentation::NeighbourGrid dense(pts, 0.05f), hashed(far, 0.05f);
+  ASSERT_GT(dense.coarseCells(), 0u);
+  ASSERT_EQ(hashed.coarseCells(), 0u);
+  ASSERT_EQ(hashed.cells(), dense.cells() + 1);
+  std::size_t points = 0;
+  for (std::size_t c = 0; c < dense.cells(); ++c) {
+    ASSERT_EQ(dense.coord(c), hashed.coord(c));
+    const std::vector<int> in(dense.cellBegin(c), dense.cellEnd(c));
+    ASSERT_EQ(in, std::vector<int>(hashed.cellBegin(c), hashed.cellEnd(c)));
+    ASSERT_TRUE(std::is_sorted(in.begin(), in.end())) << "cell " << c;
+    for (std::size_t k = 0; k < in.size(); ++k) {
+      ASSERT_EQ(dense.cellPoints(c)[k], pts[in[k]]);
+      ASSERT_EQ(dense.point(in[k]), pts[in[k]]);
+    }
+    points += in.size();
+  }
+  EXPECT_EQ(points, pts.size());
+}
+
 // The radix sorts put pairs in std::sort's order, ties, -0 and negatives included.
 TEST(RadixSort, PairsInStdSortOrder) {
   std::mt19937 rng(21);
