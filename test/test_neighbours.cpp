@@ -227,6 +227,46 @@ TEST(RadixSort, PairsInStdSortOrder) {
   }
 }
 
+// Values spread as positions along a wall or deviations from it (the
+// bucket path): std::sort's order, with repeated values, both zeros, ints
+// ascending or not, a cluster too dense for the buckets (the other paths),
+// and an extreme value that leaves most buckets empty.
+TEST(RadixSort, SpreadValuesInStdSortOrder) {
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> along(-2.0, 2.5);
+  std::normal_distribution<float> dev(0.0f, 0.01f);
+  std::uniform_int_distribution<int> ints(-50, 5000), pick(0, 9);
+  for (int round = 0; round < 16; ++round) {
+    const std::size_t n = 64 + 997 * round;
+    std::vector<std::pair<double, int>> a;
+    std::vector<std::pair<float, int>> b;
+    for (std::size_t i = 0; i < n; ++i) {
+      double d = along(rng);
+      if (pick(rng) == 0) d = std::round(d * 100) / 100;  // repeated values
+      if (pick(rng) == 1) d = i % 2 ? -0.0 : 0.0;
+      if (round % 4 == 3 && i == n / 2) d = 1e9;
+      if (round % 4 == 2 && i < n / 3) d = 1.0 + 1e-12 * static_cast<double>(i % 7);
+      a.push_back({d, round % 2 ? ints(rng) : static_cast<int>(i)});
+      float f = std::abs(dev(rng));
+      if (pick(rng) == 0) f = std::round(f * 1000) / 1000;
+      if (pick(rng) == 1) f = i % 2 ? -0.0f : 0.0f;
+      b.push_back({f, round % 2 ? static_cast<int>(i) : ints(rng) % 200});
+    }
+    auto ea = a;
+    auto eb = b;
+    std::sort(ea.begin(), ea.end());
+    std::sort(eb.begin(), eb.end());
+    util::sortPairs(a);
+    util::sortPairs(b);
+    for (std::size_t i = 0; i < n; ++i) {
+      ASSERT_EQ(a[i].second, ea[i].second) << "round " << round << " at " << i;
+      ASSERT_EQ(a[i].first, ea[i].first);
+      ASSERT_EQ(b[i].second, eb[i].second) << "round " << round << " at " << i;
+      ASSERT_EQ(b[i].first, eb[i].first);
+    }
+  }
+}
+
 TEST(Normals, PlanesGetTheirNormalTowardsTheViewpointAndEdgesACurvature) {
   // Two perpendicular planes sampled at 2 cm with 2 mm noise: a floor z = 0
   // and a tilted wall through x = 1.
