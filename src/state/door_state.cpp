@@ -175,6 +175,8 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   // alone can end the search, below).
   std::vector<Local> pts, band;
   auto gatherPoints = [&] {
+    // Lists of this task's own, moved out when done (see gatherRayPart).
+    std::vector<Local> near, in_band;
     for (std::size_t i = 0; i < points.size(); ++i) {
       const auto& q = points[i];
       if (q.z() < z0 || q.z() >= z1) continue;
@@ -184,10 +186,12 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       const bool inside = s > door.s0 + 0.03 && s < door.s1 - 0.03;
       const bool in_wall_band = d > -t - 0.03 && d < p.face_tolerance + 0.01;
       // A closed leaf may sit deeper than the estimated thickness (jambs unseen).
-      if (inside && d > -std::max(t, 0.3) - 0.03 && d < p.face_tolerance + 0.01) band.push_back({s, d, zb, static_cast<int>(i)});
+      if (inside && d > -std::max(t, 0.3) - 0.03 && d < p.face_tolerance + 0.01) in_band.push_back({s, d, zb, static_cast<int>(i)});
       if (in_wall_band && !inside) continue;  // wall, trim and jambs beside the doorway
-      pts.push_back({s, d, zb, static_cast<int>(i)});
+      near.push_back({s, d, zb, static_cast<int>(i)});
     }
+    pts.swap(near);
+    band.swap(in_band);
   };
 
   // Rays from the sensor that pass near the doorway: a leaf cannot stand
@@ -216,15 +220,20 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   // The rays in kRayParts parts of the points (tasks), joined in order.
   constexpr int kRayParts = 3;
   std::vector<std::vector<Ray>> ray_parts(kRayParts);
+  // Each part (and the points' pass) fills lists of its own task, moved out
+  // when done: the ends of lists side by side, written at every ray, would
+  // share cache lines between the cores (false sharing).
   auto gatherRayPart = [&](int k) {
     const std::size_t i0 = points.size() * k / kRayParts, i1 = points.size() * (k + 1) / kRayParts;
-    ray_parts[k].reserve(i1 - i0);  // only what is used is touched
+    std::vector<Ray> part;
+    part.reserve(i1 - i0);  // only what is used is touched
     for (std::size_t i = i0; i < i1; ++i) {
       const auto& q = points[i];
       Eigen::Vector2d qsd;
       double len2;
-      if (nearDoorway(q, qsd, len2)) ray_parts[k].push_back({qsd, q.z(), std::sqrt(len2)});
+      if (nearDoorway(q, qsd, len2)) part.push_back({qsd, q.z(), std::sqrt(len2)});
     }
+    ray_parts[k].swap(part);
   };
   // Joined, every stride-th kept: enough rays to see free space at 5 cm x
   // 10 cm cells; more only cost time.
