@@ -346,8 +346,13 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   // fd (front_diff), hf (head_fine), fo and fn (face_d_out, face_d_n), fa
   // and bh (face_along, behind_face); each face offset d of sub-column col
   // goes to addD(col, d).
+  // fa and bh are filled as lists of the scan's own, moved out when done:
+  // the ends of the halves' lists, written at every point, would otherwise
+  // share cache lines between the cores (false sharing).
   auto scan = [&](std::size_t i0, std::size_t i1, Cell* g, int* fd, std::pair<int, int>* hf, int* fo, int* fn,
-                  std::vector<double>& fa, std::vector<std::pair<double, double>>& bh, auto&& addD) {
+                  std::vector<double>& fa_out, std::vector<std::pair<double, double>>& bh_out, auto&& addD) {
+    std::vector<double> fa;
+    std::vector<std::pair<double, double>> bh;
     for (std::size_t i = i0; i < i1; ++i) {
       const auto& pt = points[i];
       const double d = wall.signedDistance(pt);
@@ -408,6 +413,8 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
         fd[static_cast<std::size_t>(rb + 1) * (cols + 1) + cb + 1] += 1;
       }
     }
+    fa_out.swap(fa);
+    bh_out.swap(bh);
   };
   // Over both cores for a large cloud: the first half into the arrays
   // above, the second (a task) into arrays of its own, added after (counts
@@ -433,9 +440,11 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     second.head_fine.assign(head_fine.size(), {0, 0});
     second.face_d_out.assign(sub, 0);
     second.face_d_n.assign(sub, 0);
+    std::vector<std::pair<int, double>> face_d;  // this task's own, as above
     scan(half_at, points.size(), second.grid.data(), second.front_diff.data(), second.head_fine.data(),
          second.face_d_out.data(), second.face_d_n.data(), second.face_along, second.behind_face,
-         [&](int col, double d) { second.face_d.push_back({col, d}); });
+         [&](int col, double d) { face_d.push_back({col, d}); });
+    second.face_d.swap(face_d);
   });
   if (half_at < points.size()) {
     for (std::size_t k = 0; k < grid.size(); ++k) {
