@@ -158,11 +158,16 @@ NeighbourGrid::NeighbourGrid(const std::vector<Eigen::Vector3f>& points, float c
       struct Bounds {
         Eigen::Vector3i lo = Eigen::Vector3i::Constant(std::numeric_limits<int>::max()), hi = -lo;
       } b[2];
+      // The bounds kept in the task's own variables, stored when done: the
+      // two halves' bounds lie side by side (false sharing if written per point).
       auto cellsOf = [&](std::size_t i0, std::size_t i1, Bounds& bd) {
+        Bounds own;
         for (std::size_t i = i0; i < i1; ++i) {
-          cells[i] = cellOf(points[i], inv_);
-          bd.lo = bd.lo.cwiseMin(cells[i]), bd.hi = bd.hi.cwiseMax(cells[i]);
+          const Eigen::Vector3i c = cellOf(points[i], inv_);
+          cells[i] = c;
+          own.lo = own.lo.cwiseMin(c), own.hi = own.hi.cwiseMax(c);
         }
+        bd = own;
       };
       if (mid < n) {
 #pragma omp task default(shared)
