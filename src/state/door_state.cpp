@@ -266,9 +266,30 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     band_cells.push_back({static_cast<int>((q.s - door.s0) / abin), q.zbin});
     band_xy.emplace_back(q.s, q.d);
   }
-  std::sort(band_cells.begin(), band_cells.end());
-  band_cells.erase(std::unique(band_cells.begin(), band_cells.end()), band_cells.end());
-  const double band_cov = std::min(1.0, band_cells.size() / expected);
+  // How many distinct cells: marked on a map over the cells' range (or,
+  // were it large, by sorting).
+  std::size_t band_distinct = 0;
+  if (!band_cells.empty()) {
+    int a_lo = band_cells.front().first, a_hi = a_lo, z_lo = band_cells.front().second, z_hi = z_lo;
+    for (const auto& c : band_cells) {
+      a_lo = std::min(a_lo, c.first), a_hi = std::max(a_hi, c.first);
+      z_lo = std::min(z_lo, c.second), z_hi = std::max(z_hi, c.second);
+    }
+    const double span = (static_cast<double>(a_hi) - a_lo + 1) * (static_cast<double>(z_hi) - z_lo + 1);
+    if (span <= 4.0 * static_cast<double>(band_cells.size()) + 4096) {
+      const std::size_t zn = static_cast<std::size_t>(z_hi - z_lo + 1);
+      std::vector<char> mark(static_cast<std::size_t>(span), 0);
+      for (const auto& c : band_cells) {
+        char& m = mark[static_cast<std::size_t>(c.first - a_lo) * zn + static_cast<std::size_t>(c.second - z_lo)];
+        band_distinct += !m;
+        m = 1;
+      }
+    } else {
+      std::sort(band_cells.begin(), band_cells.end());
+      band_distinct = static_cast<std::size_t>(std::unique(band_cells.begin(), band_cells.end()) - band_cells.begin());
+    }
+  }
+  const double band_cov = std::min(1.0, band_distinct / expected);
   fit.candidate_points = static_cast<int>(pts.size());
   if (closed_band_only_above > 0 && band_cov <= closed_band_only_above) {
     fit.searched = false;
