@@ -173,6 +173,31 @@ TEST(NeighbourGrid, DenseAndHashedIndexesAgree) {
   }
 }
 
+// Clouds large enough to be gridded in two halves at once: the dense and
+// hashed indexes still agree cell by cell, point by point.
+TEST(NeighbourGrid, DenseAndHashedIndexesAgreeWhenBuiltInHalves) {
+  const auto pts = randomPoints(17, 60000, 0.4f, Eigen::Vector3f(1, -2, 0.5f));
+  auto far = pts;
+  far.push_back(Eigen::Vector3f(-5000, 4000, 300));
+  const segmentation::NeighbourGrid dense(pts, 0.05f), hashed(far, 0.05f);
+  ASSERT_GT(dense.coarseCells(), 0u);
+  ASSERT_EQ(hashed.coarseCells(), 0u);
+  ASSERT_EQ(hashed.cells(), dense.cells() + 1);
+  std::size_t points = 0;
+  for (std::size_t c = 0; c < dense.cells(); ++c) {
+    ASSERT_EQ(dense.coord(c), hashed.coord(c));
+    const std::vector<int> in(dense.cellBegin(c), dense.cellEnd(c));
+    ASSERT_EQ(in, std::vector<int>(hashed.cellBegin(c), hashed.cellEnd(c)));
+    ASSERT_TRUE(std::is_sorted(in.begin(), in.end())) << "cell " << c;
+    for (std::size_t k = 0; k < in.size(); ++k) {
+      ASSERT_EQ(dense.cellPoints(c)[k], pts[in[k]]);
+      ASSERT_EQ(dense.point(in[k]), pts[in[k]]);
+    }
+    points += in.size();
+  }
+  EXPECT_EQ(points, pts.size());
+}
+
 // The radix sorts put pairs in std::sort's order, ties, -0 and negatives included.
 TEST(RadixSort, PairsInStdSortOrder) {
   std::mt19937 rng(21);
@@ -198,6 +223,46 @@ TEST(RadixSort, PairsInStdSortOrder) {
       ASSERT_EQ(a[i].second, ea[i].second) << "round " << round << " at " << i;
       ASSERT_EQ(a[i].first, ea[i].first);
       ASSERT_EQ(b[i], eb[i]) << "round " << round << " at " << i;
+    }
+  }
+}
+
+// Values spread as positions along a wall or deviations from it (the
+// bucket path): std::sort's order, with repeated values, both zeros, ints
+// ascending or not, a cluster too dense for the buckets (the other paths),
+// and an extreme value that leaves most buckets empty.
+TEST(RadixSort, SpreadValuesInStdSortOrder) {
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> along(-2.0, 2.5);
+  std::normal_distribution<float> dev(0.0f, 0.01f);
+  std::uniform_int_distribution<int> ints(-50, 5000), pick(0, 9);
+  for (int round = 0; round < 16; ++round) {
+    const std::size_t n = 64 + 997 * round;
+    std::vector<std::pair<double, int>> a;
+    std::vector<std::pair<float, int>> b;
+    for (std::size_t i = 0; i < n; ++i) {
+      double d = along(rng);
+      if (pick(rng) == 0) d = std::round(d * 100) / 100;  // repeated values
+      if (pick(rng) == 1) d = i % 2 ? -0.0 : 0.0;
+      if (round % 4 == 3 && i == n / 2) d = 1e9;
+      if (round % 4 == 2 && i < n / 3) d = 1.0 + 1e-12 * static_cast<double>(i % 7);
+      a.push_back({d, round % 2 ? ints(rng) : static_cast<int>(i)});
+      float f = std::abs(dev(rng));
+      if (pick(rng) == 0) f = std::round(f * 1000) / 1000;
+      if (pick(rng) == 1) f = i % 2 ? -0.0f : 0.0f;
+      b.push_back({f, round % 2 ? static_cast<int>(i) : ints(rng) % 200});
+    }
+    auto ea = a;
+    auto eb = b;
+    std::sort(ea.begin(), ea.end());
+    std::sort(eb.begin(), eb.end());
+    util::sortPairs(a);
+    util::sortPairs(b);
+    for (std::size_t i = 0; i < n; ++i) {
+      ASSERT_EQ(a[i].second, ea[i].second) << "round " << round << " at " << i;
+      ASSERT_EQ(a[i].first, ea[i].first);
+      ASSERT_EQ(b[i].second, eb[i].second) << "round " << round << " at " << i;
+      ASSERT_EQ(b[i].first, eb[i].first);
     }
   }
 }

@@ -235,9 +235,39 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
                                  (std::abs(pts[i].z() - floor_z) < 0.05 || (fc.ceiling && std::abs(pts[i].z() - top_z) < 0.05));
     mask[i] = !horizontal_slab && !is_wall[i] && !is_leaf[i];
   }
-  const auto regions = segmentation::growRegions(pts, normals, grid, mask, p);
-  for (const auto& region : regions) {
-    const recognition::BoxCorners box = recognition::boundingBox(pts, region);
+  // The walls' boxes on the other core while this one grows the regions;
+  // then the regions' boxes, shared out.
+  std::vector<std::vector<int>> regions;
+  std::vector<recognition::BoxCorners> wall_boxes(walls.size()), region_boxes;
+  {
+    std::exception_ptr error;
+    auto guarded = [&error](const auto& f) {
+      try {
+        f();
+      } catch (...) {
+#pragma omp critical(dsr_segments_stage_error)
+        if (!error) error = std::current_exception();
+      }
+    };
+#pragma omp parallel
+#pragma omp single
+    {
+#pragma omp task shared(wall_boxes, guarded)
+      guarded([&] {
+        for (std::size_t wi = 0; wi < walls.size(); ++wi) wall_boxes[wi] = recognition::boundingBox(pts, walls[wi].inliers);
+      });
+      guarded([&] {
+        regions = segmentation::growRegions(pts, normals, grid, mask, p);
+        region_boxes.resize(regions.size());
+      });
+#pragma omp taskloop grainsize(1) shared(region_boxes, regions, guarded)
+      for (std::size_t r = 0; r < region_boxes.size(); ++r)
+        guarded([&] { region_boxes[r] = recognition::boundingBox(pts, regions[r]); });
+    }
+    if (error) std::rethrow_exception(error);
+  }
+  for (std::size_t r = 0; r < regions.size(); ++r) {
+    const recognition::BoxCorners& box = region_boxes[r];
     SegmentResult seg;
     seg.id = static_cast<int>(res.others.size());
     for (int k = 0; k < 8; ++k) seg.corners[k] = toInput(box.corners[k]);
@@ -247,7 +277,7 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
     res.others.push_back(seg);
   }
   for (std::size_t wi = 0; wi < walls.size(); ++wi) {
-    const recognition::BoxCorners box = recognition::boundingBox(pts, walls[wi].inliers);
+    const recognition::BoxCorners& box = wall_boxes[wi];
     WallResult w;
     w.id = static_cast<int>(wi);
     for (int k = 0; k < 8; ++k) w.corners[k] = toInput(box.corners[k]);

@@ -168,7 +168,9 @@ bool downsampleDense(long long n, const PointAt& point, const std::vector<std::u
   // of first point) with the sums of all its points in order; a cell met in
   // both takes the first's number, and the second's points are added to the
   // first's sums after it, in point order: the numbers and sums of one pass.
-  struct Half {
+  // Each on cache lines of its own: the ends of its lists, written as a
+  // half grows them, stay off the lines the other half reads and writes.
+  struct alignas(64) Half {
     std::vector<std::uint32_t> brick, cell;  // brick -> its 64 cells -> cell number
     std::vector<Eigen::Vector3d> sum;
     std::vector<int> count;

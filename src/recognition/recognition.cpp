@@ -322,10 +322,13 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     const int c = util::floorToInt((s - s_lo) / cell);
     return col_tol[std::clamp(c, 0, cols - 1)];
   };
-  // Points at the wall's body height within its face and 0.6 m behind it:
-  // where the jambs and the wall's thickness are read below.
+  // Points at the wall's body height within its face and 0.6 m behind it
+  // (near the wall), where the jambs and the wall's thickness are read
+  // below, in point order: those within the face (tolAt) as positions
+  // along the wall; those behind it by tolAt to 0.6 m as (position, depth).
   const double max_tol = *std::max_element(col_tol.begin(), col_tol.end());
-  std::vector<int> near_wall;
+  std::vector<double> face_along;
+  std::vector<std::pair<double, double>> behind_face;
   // A point off the face band whose ray from the sensor meets the wall's
   // line outside the grid (with 6 cells of shadow and 0.5 m to spare) adds
   // nothing below: the wedge from the sensor over the grid tells it cheaply.
@@ -340,15 +343,24 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     return wedge_sign * (wa.x() * q.y() - wa.y() * q.x()) < 0 || wedge_sign * (q.x() * wb.y() - q.y() * wb.x()) < 0;
   };
   // The evidence of points [i0, i1) counted into the grid g, the arrays
-  // fd (front_diff), hf (head_fine), fo and fn (face_d_out, face_d_n) and
-  // nw (near_wall); each face offset d of sub-column col goes to addD(col, d).
+  // fd (front_diff), hf (head_fine), fo and fn (face_d_out, face_d_n), fa
+  // and bh (face_along, behind_face); each face offset d of sub-column col
+  // goes to addD(col, d).
+  // fa and bh are filled as lists of the scan's own, moved out when done:
+  // the ends of the halves' lists, written at every point, would otherwise
+  // share cache lines between the cores (false sharing).
   auto scan = [&](std::size_t i0, std::size_t i1, Cell* g, int* fd, std::pair<int, int>* hf, int* fo, int* fn,
-                  std::vector<int>& nw, auto&& addD) {
+                  std::vector<double>& fa_out, std::vector<std::pair<double, double>>& bh_out, auto&& addD) {
+    std::vector<double> fa;
+    std::vector<std::pair<double, double>> bh;
     for (std::size_t i = i0; i < i1; ++i) {
       const auto& pt = points[i];
       const double d = wall.signedDistance(pt);
-      if (d >= -0.6 && d <= max_tol && pt.z() >= floor_z + 0.25 && pt.z() <= floor_z + 1.75)
-        nw.push_back(static_cast<int>(i));
+      if (d >= -0.6 && d <= max_tol && pt.z() >= floor_z + 0.25 && pt.z() <= floor_z + 1.75) {
+        const double a = wall.along(pt), tol = tolAt(a);
+        if (std::abs(d) <= tol) fa.push_back(a);
+        if (-d >= tol && -d <= 0.6) bh.push_back({a, -d});
+      }
       if (d >= d_view) continue;  // beside or behind the sensor
       if (cull && (d < band_lo || d > max_tol) && outsideWedge(pt)) continue;
       const double s_pt = wall.along(pt);
@@ -401,6 +413,8 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
         fd[static_cast<std::size_t>(rb + 1) * (cols + 1) + cb + 1] += 1;
       }
     }
+    fa_out.swap(fa);
+    bh_out.swap(bh);
   };
   // Over both cores for a large cloud: the first half into the arrays
   // above, the second (a task) into arrays of its own, added after (counts
@@ -409,13 +423,15 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   const std::size_t half_at = points.size() >= kSplitPoints ? points.size() / 2 : points.size();
   struct Second {
     std::vector<Cell> grid;
-    std::vector<int> front_diff, face_d_out, face_d_n, near_wall;
+    std::vector<int> front_diff, face_d_out, face_d_n;
+    std::vector<double> face_along;
+    std::vector<std::pair<double, double>> behind_face;
     std::vector<std::pair<int, int>> head_fine;
     std::vector<std::pair<int, double>> face_d;  // (sub-column, offset) in point order
   } second;
   bothHalves(half_at < points.size(), [&](int h) {
     if (h == 0) {
-      scan(0, half_at, grid.data(), front_diff.data(), head_fine.data(), face_d_out.data(), face_d_n.data(), near_wall,
+      scan(0, half_at, grid.data(), front_diff.data(), head_fine.data(), face_d_out.data(), face_d_n.data(), face_along, behind_face,
            [&](int col, double d) { face_d_sum[col] += d; });
       return;
     }
@@ -424,9 +440,11 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     second.head_fine.assign(head_fine.size(), {0, 0});
     second.face_d_out.assign(sub, 0);
     second.face_d_n.assign(sub, 0);
+    std::vector<std::pair<int, double>> face_d;  // this task's own, as above
     scan(half_at, points.size(), second.grid.data(), second.front_diff.data(), second.head_fine.data(),
-         second.face_d_out.data(), second.face_d_n.data(), second.near_wall,
-         [&](int col, double d) { second.face_d.push_back({col, d}); });
+         second.face_d_out.data(), second.face_d_n.data(), second.face_along, second.behind_face,
+         [&](int col, double d) { face_d.push_back({col, d}); });
+    second.face_d.swap(face_d);
   });
   if (half_at < points.size()) {
     for (std::size_t k = 0; k < grid.size(); ++k) {
@@ -438,7 +456,8 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       head_fine[k].first += second.head_fine[k].first, head_fine[k].second += second.head_fine[k].second;
     for (int k = 0; k < sub; ++k) face_d_out[k] += second.face_d_out[k], face_d_n[k] += second.face_d_n[k];
     for (const auto& cd : second.face_d) face_d_sum[cd.first] += cd.second;
-    near_wall.insert(near_wall.end(), second.near_wall.begin(), second.near_wall.end());
+    face_along.insert(face_along.end(), second.face_along.begin(), second.face_along.end());
+    behind_face.insert(behind_face.end(), second.behind_face.begin(), second.behind_face.end());
   }
   // Occluder shadows: 2-D prefix sums of the difference array.
   for (int r = 0; r < rows; ++r)
@@ -674,10 +693,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     // Jambs where the face points end, refined from the points themselves.
     double s0 = colS(lo), s1 = colS(hi + 1);
     std::vector<double> left, right;
-    for (int i : near_wall) {
-      const auto& pt = points[i];
-      const double a = wall.along(pt);
-      if (std::abs(wall.signedDistance(pt)) > tolAt(a) || pt.z() < floor_z + 0.25 || pt.z() > floor_z + 1.75) continue;
+    for (const double a : face_along) {
       if (a > s0 - 0.12 && a < s0 + 0.06) left.push_back(a);
       if (a > s1 - 0.06 && a < s1 + 0.12) right.push_back(a);
     }
@@ -820,11 +836,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       }
     }
     std::vector<double> depth_l, depth_r;
-    for (int i : near_wall) {
-      const auto& pt = points[i];
-      const double dd = -wall.signedDistance(pt);
-      const double a = wall.along(pt);
-      if (dd < tolAt(a) || dd > 0.6 || pt.z() < floor_z + 0.25 || pt.z() > floor_z + 1.75) continue;
+    for (const auto& [a, dd] : behind_face) {
       if (std::abs(a - d.s0) < 0.03) depth_l.push_back(dd);
       if (std::abs(a - d.s1) < 0.03) depth_r.push_back(dd);
     }

@@ -2,7 +2,12 @@
 
 #include "door_state_recognition/preprocess/cell_map.hpp"
 
+#include <exception>
 #include <limits>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 namespace dsr {
 namespace segmentation {
@@ -11,19 +16,51 @@ using preprocess::CellMap;
 using preprocess::cellOf;
 using preprocess::packCell;
 
+namespace {
+
+// body() with a team of two threads for its tasks: the caller's team when it
+// runs inside a parallel region (its tasks go to that team's threads), else
+// a team of its own (two threads, when there are two). An exception from
+// body() is rethrown here.
+template <class F>
+void withTasks(const F& body) {
+  std::exception_ptr error;
+  auto guarded = [&] {
+    try {
+      body();
+    } catch (...) {
+      error = std::current_exception();
+    }
+  };
+#ifdef _OPENMP
+  if (!omp_in_parallel() && omp_get_max_threads() >= 2) {
+#pragma omp parallel num_threads(2)
+#pragma omp single
+    guarded();
+  } else {
+    guarded();
+  }
+#else
+  guarded();
+#endif
+  if (error) std::rethrow_exception(error);
+}
+
+}  // namespace
+
 // The cells of the points through the dense coarse index, when the coarse
 // cells' bounding box (one coarse cell of margin) is small: at most 16
 // entries a point plus 1M, within +-2^20 cells. Cells are numbered in order
 // of first point, as the hash map numbers them. False (nothing built): too large.
-bool NeighbourGrid::buildDense(const std::vector<Eigen::Vector3f>& points, std::vector<std::uint32_t>& count,
-                               std::vector<std::uint32_t>& cell_of) {
-  const std::size_t n = points.size();
+// cell[i] is point i's cell coordinates (cellOf), lo and hi their bounds;
+// the points' counts of each cell come back in count (all) and count_mid
+// (those before mid), each cell's number in cell_of.
+bool NeighbourGrid::buildDense(const std::vector<Eigen::Vector3i>& cell, const Eigen::Vector3i& lo,
+                               const Eigen::Vector3i& hi, std::vector<std::uint32_t>& count,
+                               std::vector<std::uint32_t>& cell_of, std::size_t mid,
+                               std::vector<std::uint32_t>& count_mid) {
+  const std::size_t n = cell.size();
   if (n == 0) return false;
-  Eigen::Vector3i lo = Eigen::Vector3i::Constant(std::numeric_limits<int>::max()), hi = -lo;
-  for (const Eigen::Vector3f& p : points) {
-    const Eigen::Vector3i c = cellOf(p, inv_);
-    lo = lo.cwiseMin(c), hi = hi.cwiseMax(c);
-  }
   // Fine coordinates (and a ring of 2 around) within +-2^20: packed keys do not wrap.
   constexpr int kLimit = (1 << 20) - 4;
   if (lo.minCoeff() < -kLimit || hi.maxCoeff() > kLimit) return false;
@@ -34,76 +71,160 @@ bool NeighbourGrid::buildDense(const std::vector<Eigen::Vector3f>& points, std::
   if (volume > 16.0 * static_cast<double>(n) + (1 << 20)) return false;
   lo_ = clo;
   dims_ = dims;
+  // Each point's key: its coarse cell's place in the box, times 8, plus its
+  // place among the coarse cell's 8 (two halves at once).
+  std::vector<std::uint64_t> key(n);
+  auto keysOf = [&](std::size_t i0, std::size_t i1) {
+    for (std::size_t i = i0; i < i1; ++i) {
+      const Eigen::Vector3i& c = cell[i];
+      const std::size_t box = (static_cast<std::size_t>(half(c.z()) - clo.z()) * dims.y() + (half(c.y()) - clo.y())) *
+                                  dims.x() +
+                              (half(c.x()) - clo.x());
+      key[i] = 8 * static_cast<std::uint64_t>(box) + static_cast<std::uint64_t>((c.x() & 1) + 2 * (c.y() & 1) + 4 * (c.z() & 1));
+    }
+  };
+  if (mid < n) {
+#pragma omp task default(shared)
+    keysOf(mid, n);
+  }
+  keysOf(0, mid);
   dense_.assign(static_cast<std::size_t>(volume), CellMap::kNone);
   children_.clear();
-  coarse_coord_.clear();
-  Eigen::Vector3i last = Eigen::Vector3i::Constant(std::numeric_limits<int>::min());
+#pragma omp taskwait
+  // Numbered in point order: a coarse cell when first met (its 8 children
+  // made), a cell when first met; each remembers its first point.
+  std::vector<std::uint32_t> first, coarse_first;
+  std::uint64_t last = ~std::uint64_t(0);  // no key
   std::uint32_t last_id = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3i c = cellOf(points[i], inv_);
+    const std::uint64_t k = key[i];
     // Points come in scan order: runs of them share a cell.
-    if (c != last) {
-      const Eigen::Vector3i q(half(c.x()), half(c.y()), half(c.z()));
-      std::uint32_t& k = dense_[(static_cast<std::size_t>(q.z() - clo.z()) * dims.y() + (q.y() - clo.y())) * dims.x() +
-                                (q.x() - clo.x())];
-      if (k == CellMap::kNone) {
-        k = static_cast<std::uint32_t>(coarse_coord_.size());
-        coarse_coord_.push_back(q);
+    if (k != last) {
+      std::uint32_t& kc = dense_[k >> 3];
+      if (kc == CellMap::kNone) {
+        kc = static_cast<std::uint32_t>(coarse_first.size());
+        coarse_first.push_back(static_cast<std::uint32_t>(i));
         children_.resize(children_.size() + 8, CellMap::kNone);
       }
-      std::uint32_t& id = children_[8 * static_cast<std::size_t>(k) + (c.x() & 1) + 2 * (c.y() & 1) + 4 * (c.z() & 1)];
+      std::uint32_t& id = children_[8 * static_cast<std::size_t>(kc) + (k & 7)];
       if (id == CellMap::kNone) {
-        id = static_cast<std::uint32_t>(count.size());
-        count.push_back(0);
-        coord_.push_back(c);
-        coarse_of_.push_back(k);
+        id = static_cast<std::uint32_t>(first.size());
+        first.push_back(static_cast<std::uint32_t>(i));
+        coarse_of_.push_back(kc);
       }
-      last = c;
+      last = k;
       last_id = id;
     }
-    ++count[last_id];
     cell_of[i] = last_id;
   }
+  const std::size_t cells = first.size();
+  coord_.resize(cells);
+  for (std::size_t c = 0; c < cells; ++c) coord_[c] = cell[first[c]];
+  coarse_coord_.resize(coarse_first.size());
+  for (std::size_t k = 0; k < coarse_first.size(); ++k) {
+    const Eigen::Vector3i& c = cell[coarse_first[k]];
+    coarse_coord_[k] = Eigen::Vector3i(half(c.x()), half(c.y()), half(c.z()));
+  }
+  // Points of each cell, in the two halves at once.
+  count.assign(cells, 0);
+  if (mid < n) count_mid.assign(cells, 0);
+  std::vector<std::uint32_t>& count0 = mid < n ? count_mid : count;
+  auto tally = [&](std::size_t i0, std::size_t i1, std::vector<std::uint32_t>& cnt) {
+    for (std::size_t i = i0; i < i1; ++i) ++cnt[cell_of[i]];
+  };
+  if (mid < n) {
+#pragma omp task default(shared)
+    tally(mid, n, count);
+  }
+  tally(0, mid, count0);
+#pragma omp taskwait
+  if (mid < n)
+    for (std::size_t c = 0; c < cells; ++c) count[c] += count_mid[c];
   return true;
 }
 
 NeighbourGrid::NeighbourGrid(const std::vector<Eigen::Vector3f>& points, float cell)
     : cell_(cell), inv_(1.0 / cell) {
   const std::size_t n = points.size();
-  std::vector<std::uint32_t> cell_of(n);
-  std::vector<std::uint32_t> count;
-  if (!buildDense(points, count, cell_of)) {
-    CellMap map(std::max<std::size_t>(n, 1));
-    std::uint64_t last_key = ~std::uint64_t(0);  // no packed key
-    std::uint32_t last_id = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      const Eigen::Vector3i c = cellOf(points[i], inv_);
-      // Points come in scan order: runs of them share a cell.
-      const std::uint64_t key = packCell(c.x(), c.y(), c.z());
-      const std::uint32_t id = key == last_key ? last_id : map.insert(key);
-      last_key = key;
-      last_id = id;
-      if (id == count.size()) {
-        count.push_back(0);
-        coord_.push_back(c);
+  // Two halves of the points at once (tasks) where it pays: the cells of
+  // the points and their bounds, the dense index's keys and counts, then
+  // the points sorted into cell order.
+  const std::size_t mid = n >= 20000 ? n / 2 : n;
+  withTasks([&] {
+    std::vector<std::uint32_t> cell_of(n);
+    std::vector<std::uint32_t> count, count_mid;
+    {
+      std::vector<Eigen::Vector3i> cells(n);
+      struct Bounds {
+        Eigen::Vector3i lo = Eigen::Vector3i::Constant(std::numeric_limits<int>::max()), hi = -lo;
+      } b[2];
+      // The bounds kept in the task's own variables, stored when done: the
+      // two halves' bounds lie side by side (false sharing if written per point).
+      auto cellsOf = [&](std::size_t i0, std::size_t i1, Bounds& bd) {
+        Bounds own;
+        for (std::size_t i = i0; i < i1; ++i) {
+          const Eigen::Vector3i c = cellOf(points[i], inv_);
+          cells[i] = c;
+          own.lo = own.lo.cwiseMin(c), own.hi = own.hi.cwiseMax(c);
+        }
+        bd = own;
+      };
+      if (mid < n) {
+#pragma omp task default(shared)
+        cellsOf(mid, n, b[1]);
       }
-      ++count[id];
-      cell_of[i] = id;
+      cellsOf(0, mid, b[0]);
+#pragma omp taskwait
+      const Eigen::Vector3i lo = b[0].lo.cwiseMin(b[1].lo), hi = b[0].hi.cwiseMax(b[1].hi);
+      if (!buildDense(cells, lo, hi, count, cell_of, mid, count_mid)) {
+        CellMap map(std::max<std::size_t>(n, 1));
+        std::uint64_t last_key = ~std::uint64_t(0);  // no packed key
+        std::uint32_t last_id = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+          if (i == mid) count_mid = count;  // the cells' counts over points [0, mid)
+          const Eigen::Vector3i& c = cells[i];
+          // Points come in scan order: runs of them share a cell.
+          const std::uint64_t key = packCell(c.x(), c.y(), c.z());
+          const std::uint32_t id = key == last_key ? last_id : map.insert(key);
+          last_key = key;
+          last_id = id;
+          if (id == count.size()) {
+            count.push_back(0);
+            coord_.push_back(c);
+          }
+          ++count[id];
+          cell_of[i] = id;
+        }
+        map_ = std::move(map);
+      }
     }
-    map_ = std::move(map);
-  }
-  begin_.assign(count.size() + 1, 0);
-  for (std::size_t c = 0; c < count.size(); ++c) begin_[c + 1] = begin_[c] + count[c];
-  std::vector<std::uint32_t> fill(begin_.begin(), begin_.end() - 1);
-  order_.resize(n);
-  slot_.resize(n);
-  pos_.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t s = fill[cell_of[i]]++;
-    order_[s] = static_cast<int>(i);
-    slot_[i] = static_cast<int>(s);
-    pos_[s] = points[i];
-  }
+    begin_.assign(count.size() + 1, 0);
+    for (std::size_t c = 0; c < count.size(); ++c) begin_[c + 1] = begin_[c] + count[c];
+    order_.resize(n);
+    slot_.resize(n);
+    pos_.resize(n);
+    // Each cell's points in point order: those of [0, mid) from its first
+    // slot on, those of [mid, n) after them.
+    std::vector<std::uint32_t> fill0(begin_.begin(), begin_.end() - 1), fill1;
+    if (mid < n) {
+      fill1 = fill0;
+      for (std::size_t c = 0; c < count_mid.size(); ++c) fill1[c] += count_mid[c];
+    }
+    auto place = [&](std::size_t i0, std::size_t i1, std::vector<std::uint32_t>& fill) {
+      for (std::size_t i = i0; i < i1; ++i) {
+        const std::uint32_t s = fill[cell_of[i]]++;
+        order_[s] = static_cast<int>(i);
+        slot_[i] = static_cast<int>(s);
+        pos_[s] = points[i];
+      }
+    };
+    if (mid < n) {
+#pragma omp task default(shared)
+      place(mid, n, fill1);
+    }
+    place(0, mid, fill0);
+#pragma omp taskwait
+  });
 }
 
 std::uint32_t NeighbourGrid::findCell(int x, int y, int z) const {

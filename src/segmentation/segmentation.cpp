@@ -6,6 +6,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <limits>
+#include <memory>
 #include <cmath>
 #include <exception>
 #include <random>
@@ -531,13 +532,13 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
   std::mt19937 rng(static_cast<unsigned>(p.random_seed));
   std::vector<float> sx, sy, snx, sny;  // the scored sample, side by side
   // A round's wall rules (addWallSegments) run as a task on the other core
-  // while this one draws the next round's plane, which needs only the pool
+  // while this one draws the next rounds' planes, which need only the pool
   // and the generator, not the walls. The rules of consecutive rounds still
-  // run in turn (the shadow test reads the walls before), and a round is
-  // kept only if the walls found before it leave room (max_walls), as in a
-  // loop that waited for them: one drawn past the last is dropped unused.
+  // run in turn (task dependences: the shadow test reads the walls before),
+  // and a round is kept only if the walls found before it leave room
+  // (max_walls), as in a loop that waited for them: rounds drawn past the
+  // last are dropped unused.
   std::exception_ptr error;
-  std::vector<int> task_inl;  // the inliers the running task reads
   int threads = 1;
 #ifdef _OPENMP
   threads = std::min(2, omp_get_max_threads());
@@ -642,16 +643,20 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
       }
       const Eigen::Vector2d dir(best_n.y(), -best_n.x());
       if ((viewpoint - best_pt).dot(best_n) < 0) best_n = -best_n;
-#pragma omp taskwait
-      if (error || static_cast<int>(walls.size()) >= p.max_walls) break;
-      task_inl.swap(inl);
-#pragma omp task default(shared) firstprivate(best_pt, best_n, dir) if (task_inl.size() >= kTaskInliers)
+      // The round's rules after the previous round's (depend), each with its
+      // own inliers; skipped once a round failed or max_walls walls are
+      // found, where a loop that waited for them would have stopped.
+      auto round_inl = std::make_shared<std::vector<int>>(std::move(inl));
+      const bool defer = round_inl->size() >= kTaskInliers;
+#pragma omp task default(shared) firstprivate(best_pt, best_n, dir, round_inl) depend(inout : walls) if (defer)
       try {
-        const std::size_t before = walls.size();
-        addWallSegments(points, task_inl, best_pt, dir, best_n, floor_z, height_top, ceiling_known, p, walls, view,
-                        &viewpoint);
+        if (!error && static_cast<int>(walls.size()) < p.max_walls) {
+          const std::size_t before = walls.size();
+          addWallSegments(points, *round_inl, best_pt, dir, best_n, floor_z, height_top, ceiling_known, p, walls, view,
+                          &viewpoint);
         if (on_wall)
-          for (std::size_t i = before; i < walls.size(); ++i) on_wall(i, walls[i]);
+            for (std::size_t i = before; i < walls.size(); ++i) on_wall(i, walls[i]);
+        }
       } catch (...) {
         error = std::current_exception();
       }

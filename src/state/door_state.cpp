@@ -178,6 +178,8 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   // alone can end the search, below).
   std::vector<Local> pts, band;
   auto gatherPoints = [&] {
+    // Lists of this task's own, moved out when done (see gatherRayPart).
+    std::vector<Local> near, in_band;
     for (std::size_t i = 0; i < points.size(); ++i) {
       const auto& q = points[i];
       if (q.z() < z0 || q.z() >= z1) continue;
@@ -187,10 +189,12 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       const bool inside = s > door.s0 + 0.03 && s < door.s1 - 0.03;
       const bool in_wall_band = d > -t - 0.03 && d < p.face_tolerance + 0.01;
       // A closed leaf may sit deeper than the estimated thickness (jambs unseen).
-      if (inside && d > -std::max(t, 0.3) - 0.03 && d < p.face_tolerance + 0.01) band.push_back({s, d, zb, static_cast<int>(i)});
+      if (inside && d > -std::max(t, 0.3) - 0.03 && d < p.face_tolerance + 0.01) in_band.push_back({s, d, zb, static_cast<int>(i)});
       if (in_wall_band && !inside) continue;  // wall, trim and jambs beside the doorway
-      pts.push_back({s, d, zb, static_cast<int>(i)});
+      near.push_back({s, d, zb, static_cast<int>(i)});
     }
+    pts.swap(near);
+    band.swap(in_band);
   };
 
   // Rays from the sensor that pass near the doorway: a leaf cannot stand
@@ -219,15 +223,20 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   // The rays in kRayParts parts of the points (tasks), joined in order.
   constexpr int kRayParts = 3;
   std::vector<std::vector<Ray>> ray_parts(kRayParts);
+  // Each part (and the points' pass) fills lists of its own task, moved out
+  // when done: the ends of lists side by side, written at every ray, would
+  // share cache lines between the cores (false sharing).
   auto gatherRayPart = [&](int k) {
     const std::size_t i0 = points.size() * k / kRayParts, i1 = points.size() * (k + 1) / kRayParts;
-    ray_parts[k].reserve(i1 - i0);  // only what is used is touched
+    std::vector<Ray> part;
+    part.reserve(i1 - i0);  // only what is used is touched
     for (std::size_t i = i0; i < i1; ++i) {
       const auto& q = points[i];
       Eigen::Vector2d qsd;
       double len2;
-      if (nearDoorway(q, qsd, len2)) ray_parts[k].push_back({qsd, q.z(), std::sqrt(len2)});
+      if (nearDoorway(q, qsd, len2)) part.push_back({qsd, q.z(), std::sqrt(len2)});
     }
+    ray_parts[k].swap(part);
   };
   // Joined, every stride-th kept: enough rays to see free space at 5 cm x
   // 10 cm cells; more only cost time.
@@ -260,9 +269,30 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     band_cells.push_back({static_cast<int>((q.s - door.s0) / abin), q.zbin});
     band_xy.emplace_back(q.s, q.d);
   }
-  std::sort(band_cells.begin(), band_cells.end());
-  band_cells.erase(std::unique(band_cells.begin(), band_cells.end()), band_cells.end());
-  const double band_cov = std::min(1.0, band_cells.size() / expected);
+  // How many distinct cells: marked on a map over the cells' range (or,
+  // were it large, by sorting).
+  std::size_t band_distinct = 0;
+  if (!band_cells.empty()) {
+    int a_lo = band_cells.front().first, a_hi = a_lo, z_lo = band_cells.front().second, z_hi = z_lo;
+    for (const auto& c : band_cells) {
+      a_lo = std::min(a_lo, c.first), a_hi = std::max(a_hi, c.first);
+      z_lo = std::min(z_lo, c.second), z_hi = std::max(z_hi, c.second);
+    }
+    const double span = (static_cast<double>(a_hi) - a_lo + 1) * (static_cast<double>(z_hi) - z_lo + 1);
+    if (span <= 4.0 * static_cast<double>(band_cells.size()) + 4096) {
+      const std::size_t zn = static_cast<std::size_t>(z_hi - z_lo + 1);
+      std::vector<char> mark(static_cast<std::size_t>(span), 0);
+      for (const auto& c : band_cells) {
+        char& m = mark[static_cast<std::size_t>(c.first - a_lo) * zn + static_cast<std::size_t>(c.second - z_lo)];
+        band_distinct += !m;
+        m = 1;
+      }
+    } else {
+      std::sort(band_cells.begin(), band_cells.end());
+      band_distinct = static_cast<std::size_t>(std::unique(band_cells.begin(), band_cells.end()) - band_cells.begin());
+    }
+  }
+  const double band_cov = std::min(1.0, band_distinct / expected);
   fit.candidate_points = static_cast<int>(pts.size());
   if (closed_band_only_above > 0 && band_cov <= closed_band_only_above) {
     fit.searched = false;

@@ -104,8 +104,9 @@ class NeighbourGrid {
 
  private:
   std::uint32_t findCell(int x, int y, int z) const;
-  bool buildDense(const std::vector<Eigen::Vector3f>& points, std::vector<std::uint32_t>& count,
-                  std::vector<std::uint32_t>& cell_of);
+  bool buildDense(const std::vector<Eigen::Vector3i>& cell, const Eigen::Vector3i& lo, const Eigen::Vector3i& hi,
+                  std::vector<std::uint32_t>& count, std::vector<std::uint32_t>& cell_of, std::size_t mid,
+                  std::vector<std::uint32_t>& count_mid);
   float cell_ = 1;
   double inv_ = 1;
   std::vector<Eigen::Vector3f> pos_;   // points in cell order
