@@ -24,7 +24,11 @@ def one(args, seed, out):
     subprocess.run(sim, check=True)
     up = args.up or ("-y" if args.sensor == "rgbd" else "+z")
     # Several scan positions: each station's own file (with its VIEWPOINT), as a survey delivers them.
-    stations = len(json.load(open(f"{prefix}.json"))["sensor_origins"]) if args.sensor == "tls" else 1
+    if args.sensor == "tls":
+        with open(f"{prefix}.json") as f:
+            stations = len(json.load(f)["sensor_origins"])
+    else:
+        stations = 1
     inputs = [f"{prefix}.station{k}.pcd" for k in range(stations)] if stations > 1 else [f"{prefix}.pcd"]
     config = ["--config", args.config] if args.config else []
     subprocess.run([str(BIN / "door_state_cli"), "--quiet", "--up", up, "--json", f"{prefix}.report.json"] + config + inputs,
@@ -51,6 +55,8 @@ def main():
     ap.add_argument("--verbose", action="store_true")
     ap.add_argument("--out", default=None)
     args = ap.parse_args()
+    if args.sensor != "tls" and (args.beyond_doors or args.viewpoints != 1):
+        ap.error("--beyond-doors and --viewpoints are for --sensor tls")
     out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="dsr_sweep_"))
     out.mkdir(parents=True, exist_ok=True)
     seeds = range(args.first_seed, args.first_seed + args.scenes)

@@ -13,7 +13,8 @@ and NAME.log (simulated clouds are deleted).
 Names: tls-400k-SEED, tls-100k-SEED, tls-1M-SEED, rgbd-SEED,
 stations3-400k-SEED (three stations of 400k rays each), stations2-400k-SEED;
 beyond-400k-SEED (one station inside and one beyond each door, 400k rays in
-all); rgbd-nohandles-SEED (leaves without handles); -bound5- before the seed (tls-400k-bound5-SEED, stations3-400k-bound5-SEED)
+all); -nohandles- before the seed (leaves without handles, e.g.
+rgbd-nohandles-SEED); -bound5- before the seed (tls-400k-bound5-SEED, stations3-400k-bound5-SEED)
 runs with unseen_leaf_min_bound_deg 5.
 """
 import json, os, shutil, subprocess, sys, tempfile
@@ -39,12 +40,15 @@ def sweep_args(name, config_dir):
     parts = name.split("-")
     seed = parts[-1]
     if parts[0] == "rgbd":
-        return ["--sensor", "rgbd", "--first-seed", seed] + (["--no-handles"] if "nohandles" in parts else [])
-    rays = RAYS[parts[1]]
-    if parts[0] == "beyond":  # one station inside, one beyond each door: the rays in total
-        return ["--sensor", "tls", "--beyond-doors", "--points", str(rays), "--first-seed", seed]
-    stations = 1 if parts[0] == "tls" else int(parts[0][len("stations"):])
-    args = ["--sensor", "tls", "--viewpoints", str(stations), "--points", str(rays * stations), "--first-seed", seed]
+        args = ["--sensor", "rgbd", "--first-seed", seed]
+    elif parts[0] == "beyond":  # one station inside, one beyond each door: the rays in total
+        args = ["--sensor", "tls", "--beyond-doors", "--points", str(RAYS[parts[1]]), "--first-seed", seed]
+    else:
+        stations = 1 if parts[0] == "tls" else int(parts[0][len("stations"):])
+        args = ["--sensor", "tls", "--viewpoints", str(stations), "--points", str(RAYS[parts[1]] * stations),
+                "--first-seed", seed]
+    if "nohandles" in parts:
+        args += ["--no-handles"]
     if "bound5" in parts:
         cfg = config_dir / "bound5.yaml"
         cfg.write_text("unseen_leaf_min_bound_deg: 5.0\n")

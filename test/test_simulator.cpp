@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 
 #include "door_state_recognition/sim/ground_truth.hpp"
@@ -161,6 +162,40 @@ TEST(Simulator, DoorAtNinetyDegreesIsPerpendicularToItsWall) {
       ASSERT_GT(pts.size(), 200u);
       EXPECT_LT(std::abs(planeNormal(pts).dot(s.walls[1].normal)), 0.03);
     }
+}
+
+TEST(Simulator, HandlesSitAtTheLatchEdgeOneMetreUpOnBothFaces) {
+  // Every way round and at any angle: two handle boxes per leaf, centred
+  // 1 m above the floor, 11 cm from the leaf's latch edge along it, 3 cm
+  // off each face of the leaf. (The leaf's own third axis points down for
+  // half the doors.) None without handles.
+  for (const bool hinge_left : {true, false})
+    for (const bool into_room : {true, false})
+      for (const double angle : {0.0, 40.0, 110.0})
+        for (const double height : {2.05, 2.15}) {
+          RoomSpec r = oneDoorRoom(angle, hinge_left, into_room, 0.0);
+          r.doors[0].height = height;
+          const Scene s = buildScene(r);
+          const DoorTruth& d = s.doors[0];
+          const Eigen::Vector3d latch = d.leaf_corners[1], along = (d.leaf_corners[1] - d.leaf_corners[0]).normalized();
+          const Eigen::Vector3d face = along.cross(Eigen::Vector3d::UnitZ());
+          int handles = 0;
+          for (const Box& b : s.boxes) {
+            if (b.surface != Surface::Handle) continue;
+            ++handles;
+            EXPECT_EQ(b.owner, 0);
+            const Eigen::Vector3d c = b.pose.translation();
+            SCOPED_TRACE(::testing::Message() << "hinge_left=" << hinge_left << " into_room=" << into_room
+                                              << " angle=" << angle << " height=" << height);
+            EXPECT_NEAR(c.z(), 1.0, 1e-9);
+            EXPECT_NEAR((latch - c).dot(along), 0.11, 0.01);
+            EXPECT_NEAR(std::abs((c - latch).dot(face)), r.leaf_thickness / 2 + 0.03, 1e-9);
+          }
+          EXPECT_EQ(handles, 2);
+          r.handles = false;
+          const Scene bare = buildScene(r);
+          EXPECT_TRUE(std::none_of(bare.boxes.begin(), bare.boxes.end(), [](const Box& b) { return b.surface == Surface::Handle; }));
+        }
 }
 
 TEST(Simulator, OpeningAngleRotatesTheLeafAboutTheHinge) {

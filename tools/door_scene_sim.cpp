@@ -33,9 +33,10 @@ options:
   --seed N               random seed (default 1)
   --sensor tls|rgbd      terrestrial laser scanner (default) or one 640x480 RGB-D frame
   --points N             TLS rays over all viewpoints (default 400000)
-  --viewpoints K         TLS scan positions (default 1); with K > 1 and pcd, each
-                         position's scan is also written to PREFIX.stationI.pcd
-                         (same frame, VIEWPOINT = the position)
+  --viewpoints K         TLS scan positions inside the room (default 1); with more
+                         than one position in all (K > 1 or --beyond-doors) and
+                         pcd, each position's scan is also written to
+                         PREFIX.stationI.pcd (same frame, VIEWPOINT = the position)
   --no-handles           leaves without their lever handles
   --beyond-doors         TLS: one more scan position in the room behind each
                          door, 1.2-2 m beyond it (as a surveyor walks through;

@@ -199,8 +199,9 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
       reports.push_back(d);
     }
   // One doorway: centres close, or the doorways overlapping along one wall,
-  // or along the two faces of one wall (parallel, up to kWallFaces apart: a
-  // station beyond a door sees the wall's other face). A leaf's shadow
+  // or along the two faces of one wall (parallel, the doorways' centres, each
+  // at mid-thickness, up to kWallFaces apart across it: a station beyond a
+  // door sees the wall's other face). A leaf's shadow
   // beside its doorway, or a leaf fitted from the wrong jamb, taken from
   // another station for a doorway of its own, overlaps the true one (5023,
   // 1011 seen from beyond a door).
@@ -210,7 +211,7 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
     const Line2 &Lo = lines[*o.wall_id], &Ld = lines[*d.wall_id];
     if (std::abs(Lo.dir.dot(Ld.dir)) < kWallParallelCos) return false;
     const Eigen::Vector2d n(-Lo.dir.y(), Lo.dir.x());
-    if (std::abs((Ld.point - Lo.point).dot(n)) > kWallFaces) return false;
+    if (std::abs(((R * d.opening_center).head<2>() - (R * o.opening_center).head<2>()).dot(n)) > kWallFaces) return false;
     auto span = [&](const DoorResult& x) {
       const double c = ((R * x.opening_center).head<2>() - Lo.point).dot(Lo.dir);
       return std::make_pair(c - x.width / 2, c + x.width / 2);

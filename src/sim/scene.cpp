@@ -207,8 +207,11 @@ Scene buildScene(const RoomSpec& r) {
       scene.boxes.push_back(leaf);
       if (r.handles && lh > 1.2 && lw > 0.35)
         for (const double side : {1.0, -1.0}) {
+          // The leaf's third axis (e x k) points down for half the doors: the
+          // handle's height is measured along the world's up.
+          const double up = local.linear().col(2).z() > 0 ? 1.0 : -1.0;
           Box handle;
-          handle.pose = leaf.pose * Eigen::Translation3d(lw / 2 - 0.11, side * (lt / 2 + 0.03), 1.0 - (kBottomGap + lh / 2));
+          handle.pose = leaf.pose * Eigen::Translation3d(lw / 2 - 0.11, side * (lt / 2 + 0.03), up * (1.0 - (kBottomGap + lh / 2)));
           handle.half = Eigen::Vector3d(0.06, 0.03, 0.012);
           handle.surface = Surface::Handle;
           handle.owner = di;

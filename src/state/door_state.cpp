@@ -644,7 +644,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   Score best;
   int best_h = 0, best_sw = 0;
   double best_deg = 0, best_recess = 0, best_s = door.s0;
-  // The hinges hs over every 2 deg; the best replaced by a hypothesis that
+  // The hinges given, every 2 deg; the best replaced by a hypothesis that
   // scores more. `lower`: the exact score of a hypothesis already scored
   // (rays are tested only where support could beat it).
   auto globalSearch = [&](const std::vector<Hinge>& hinges, double lower) {
@@ -702,7 +702,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     }
   };
   // Global search: hinge at either jamb, either swing side, hinge on the
-  // face or set back (recess), every degree. The hinges are scored as tasks
+  // face or set back (recess), every 2 deg. The hinges are scored as tasks
   // (over the cores), the best taken in order. Support bounds a hypothesis's
   // score from above (contradiction only lowers it): rays are tested only at
   // the angles whose bound reaches the exact score of the best-bounded one,
@@ -725,7 +725,11 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       const std::vector<Hinge> at = hingesAt(out);
       more.insert(more.end(), at.begin(), at.end());
     }
-    globalSearch(more, best.score);
+    // Rays only where support could beat the best so far and reach the
+    // least a leaf is taken with (half min_leaf_coverage of the shortest
+    // leaf's cells, in a doorway beyond doubt): where no leaf is seen (a
+    // doorway seen through, its leaf out of sight) that leaves few or none.
+    globalSearch(more, std::max(best.score, 0.5 * p.min_leaf_coverage * na_min * nz));
   }
   // Local search: the jamb seen from the wall can be off where a leaf hides
   // or shadows its own doorway; move the hinge along the wall and the angle.
@@ -811,11 +815,16 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   // other, put the latch at that jamb (else the search's side stands: a
   // closed leaf's hinge side is a guess without a handle).
   const bool closed_band = band_cov >= 0.55 && (best_deg < p.closed_below_deg + 3 || gen_cov < band_cov);
-  if (closed_band && band.size() >= 10) {
+  // Its visible face: the median depth of the band's points.
+  double band_face = 0;
+  if (closed_band) {
     std::vector<double> dv;
     for (const Local& q : band) dv.push_back(q.d);
     std::nth_element(dv.begin(), dv.begin() + dv.size() / 2, dv.end());
-    const double face = dv[dv.size() / 2];
+    band_face = dv[dv.size() / 2];
+  }
+  if (closed_band && band.size() >= 10) {
+    const double face = band_face;
     int near0 = 0, near1 = 0;
     for (const Local& q : pts) {
       const double z = points[q.index].z() - floor_z;
@@ -826,6 +835,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     fit.handle_points = std::max(near0, near1);
     if (near0 >= 3 && near0 >= 3 * near1) best_h = 1;       // latch at s0
     else if (near1 >= 3 && near1 >= 3 * near0) best_h = 0;  // latch at s1
+    best_s = best_h == 0 ? door.s0 : door.s1;
   }
   fit.best_angle_deg = best_deg;
   fit.best_coverage = gen_cov;
@@ -866,10 +876,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     // A closed leaf sits flush with (or set back from) the face of the wall
     // on its swing side: its visible face near the near face says "towards
     // the viewer", near the far face (less a leaf thickness) "away".
-    std::vector<double> dv;
-    for (const Local& q : band) dv.push_back(q.d);
-    std::nth_element(dv.begin(), dv.begin() + dv.size() / 2, dv.end());
-    fit.face_d = dv[dv.size() / 2];
+    fit.face_d = band_face;
     fit.toward_viewer = -fit.face_d < (t - lt) / 2;
     fit.coverage = band_cov;
     for (const Local& q : band) fit.inliers.push_back(q.index);
@@ -971,8 +978,10 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       double len2;
       if (nearDoorway(q, qsd, len2)) image.add(qsd, q.z());
     }
-    // Every hinge, swing side and recess the search tried: a leaf hinged
-    // deeper in its doorway than the hypothesis would rule it out wrongly.
+    // Every hinge at a jamb, swing side and recess the search tried (the
+    // bound is that of a leaf spanning the doorway seen, so only at its
+    // jambs, not at the hinges moved off them): a leaf hinged deeper in its
+    // doorway than the hypothesis would rule it out wrongly.
     for (int h = 0; h < 2; ++h)
       for (int sw = 0; sw < 2; ++sw)
         for (double rec : recess_steps) {

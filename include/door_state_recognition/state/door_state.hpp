@@ -37,7 +37,7 @@ struct LeafFit {
   double length = 0, top_z = 0;
   double s_hinge = 0, s_latch = 0;  // the doorway's jambs along the wall, refined by the fit
   double face_d = 0;            // closed leaf: depth of its visible face (<= 0, behind the wall face)
-  int handle_points = 0;        // closed leaf: points of a handle at the jamb that has more (0: none sought)
+  int handle_points = 0;        // closed leaf: points of a handle at the jamb that has more (0: none, or not sought)
   // Best hypothesis, found or not (for a leaf closed in the wall band with
   // the global search's best below closed_below_deg + 0.5, that search's best:
   // the local search is skipped).
