@@ -199,6 +199,25 @@ TEST(NeighbourGrid, DenseAndHashedIndexesAgreeWhenBuiltInHalves) {
 }
 
 // The radix sorts put pairs in std::sort's order, ties, -0 and negatives included.
+// util::sortPairs puts both lists in std::sort's order (pairs compared
+// whole: equal values in the order of their ints).
+static void expectSortedAsStdSortDoes(std::vector<std::pair<double, int>> a, std::vector<std::pair<float, int>> b, int round) {
+  auto ea = a;
+  auto eb = b;
+  std::sort(ea.begin(), ea.end());
+  std::sort(eb.begin(), eb.end());
+  util::sortPairs(a);
+  util::sortPairs(b);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].second, ea[i].second) << "round " << round << " at " << i;
+    ASSERT_EQ(a[i].first, ea[i].first);
+  }
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    ASSERT_EQ(b[i].second, eb[i].second) << "round " << round << " at " << i;
+    ASSERT_EQ(b[i].first, eb[i].first);
+  }
+}
+
 TEST(RadixSort, PairsInStdSortOrder) {
   std::mt19937 rng(21);
   std::uniform_int_distribution<int> small(-20, 20);
@@ -213,17 +232,7 @@ TEST(RadixSort, PairsInStdSortOrder) {
       a.push_back({d, static_cast<int>(i)});  // ascending ints: the radix path
       b.push_back({std::abs(static_cast<float>(d)), std::abs(small(rng)) * 1000 + small(rng) + 20});
     }
-    auto ea = a;
-    auto eb = b;
-    std::sort(ea.begin(), ea.end());
-    std::sort(eb.begin(), eb.end());
-    util::sortPairs(a);
-    util::sortPairs(b);
-    for (std::size_t i = 0; i < n; ++i) {
-      ASSERT_EQ(a[i].second, ea[i].second) << "round " << round << " at " << i;
-      ASSERT_EQ(a[i].first, ea[i].first);
-      ASSERT_EQ(b[i], eb[i]) << "round " << round << " at " << i;
-    }
+    ASSERT_NO_FATAL_FAILURE(expectSortedAsStdSortDoes(a, b, round));
   }
 }
 
@@ -252,18 +261,7 @@ TEST(RadixSort, SpreadValuesInStdSortOrder) {
       if (pick(rng) == 1) f = i % 2 ? -0.0f : 0.0f;
       b.push_back({f, round % 2 ? static_cast<int>(i) : ints(rng) % 200});
     }
-    auto ea = a;
-    auto eb = b;
-    std::sort(ea.begin(), ea.end());
-    std::sort(eb.begin(), eb.end());
-    util::sortPairs(a);
-    util::sortPairs(b);
-    for (std::size_t i = 0; i < n; ++i) {
-      ASSERT_EQ(a[i].second, ea[i].second) << "round " << round << " at " << i;
-      ASSERT_EQ(a[i].first, ea[i].first);
-      ASSERT_EQ(b[i].second, eb[i].second) << "round " << round << " at " << i;
-      ASSERT_EQ(b[i].first, eb[i].first);
-    }
+    ASSERT_NO_FATAL_FAILURE(expectSortedAsStdSortDoes(a, b, round));
   }
 }
 
@@ -308,7 +306,9 @@ TEST(Normals, PlanesGetTheirNormalTowardsTheViewpointAndEdgesACurvature) {
       ++far_checked;
       wall_checked += kind[i];
     }
-    if (near_edge && std::abs(pts[i].y()) < 0.8f) EXPECT_GT(n.curvature[i], 0.01f) << "edge point " << i;
+    if (near_edge && std::abs(pts[i].y()) < 0.8f) {
+      EXPECT_GT(n.curvature[i], 0.01f) << "edge point " << i;
+    }
   }
   EXPECT_GT(far_checked, 3000);
   EXPECT_GT(wall_checked, 2000);

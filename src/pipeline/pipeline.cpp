@@ -14,6 +14,7 @@
 #include "door_state_recognition/recognition/recognition.hpp"
 #include "door_state_recognition/segmentation/segmentation.hpp"
 #include "door_state_recognition/state/doors.hpp"
+#include "door_state_recognition/util/first_error.hpp"
 
 namespace dsr {
 
@@ -105,25 +106,17 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   segmentation::NeighbourGrid grid;
   preprocess::Points no_return;
   {
-    std::exception_ptr error;
-    auto guarded = [&error](const auto& f) {
-      try {
-        f();
-      } catch (...) {
-#pragma omp critical(dsr_grid_stage_error)
-        if (!error) error = std::current_exception();
-      }
-    };
+    util::FirstError error;
 #pragma omp parallel if (organized)
 #pragma omp single
     {
       if (organized) {
-#pragma omp task shared(no_return, guarded)
-        guarded([&] { no_return = preprocess::noReturnRays(cloud, viewpoint_in.cast<float>()); });
+#pragma omp task shared(no_return, error)
+        error.run([&] { no_return = preprocess::noReturnRays(cloud, viewpoint_in.cast<float>()); });
       }
-      guarded([&] { grid = segmentation::NeighbourGrid(thinned, static_cast<float>(1.5 * std::max(p.voxel_size, 0.01))); });
+      error.run([&] { grid = segmentation::NeighbourGrid(thinned, static_cast<float>(1.5 * std::max(p.voxel_size, 0.01))); });
     }
-    if (error) std::rethrow_exception(error);
+    error.rethrow();
   }
   segmentation::Normals normals = segmentation::estimateNormals(thinned, grid, p.normal_k, viewpoint_in.cast<float>());
   watch.mark("normals");
@@ -240,31 +233,23 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   std::vector<std::vector<int>> regions;
   std::vector<recognition::BoxCorners> wall_boxes(walls.size()), region_boxes;
   {
-    std::exception_ptr error;
-    auto guarded = [&error](const auto& f) {
-      try {
-        f();
-      } catch (...) {
-#pragma omp critical(dsr_segments_stage_error)
-        if (!error) error = std::current_exception();
-      }
-    };
+    util::FirstError error;
 #pragma omp parallel
 #pragma omp single
     {
-#pragma omp task shared(wall_boxes, guarded)
-      guarded([&] {
+#pragma omp task shared(wall_boxes, error)
+      error.run([&] {
         for (std::size_t wi = 0; wi < walls.size(); ++wi) wall_boxes[wi] = recognition::boundingBox(pts, walls[wi].inliers);
       });
-      guarded([&] {
+      error.run([&] {
         regions = segmentation::growRegions(pts, normals, grid, mask, p);
         region_boxes.resize(regions.size());
       });
-#pragma omp taskloop grainsize(1) shared(region_boxes, regions, guarded)
+#pragma omp taskloop grainsize(1) shared(region_boxes, regions, error)
       for (std::size_t r = 0; r < region_boxes.size(); ++r)
-        guarded([&] { region_boxes[r] = recognition::boundingBox(pts, regions[r]); });
+        error.run([&] { region_boxes[r] = recognition::boundingBox(pts, regions[r]); });
     }
-    if (error) std::rethrow_exception(error);
+    error.rethrow();
   }
   for (std::size_t r = 0; r < regions.size(); ++r) {
     const recognition::BoxCorners& box = region_boxes[r];
