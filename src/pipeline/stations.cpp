@@ -220,31 +220,26 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
     const auto [b0, b1] = span(d);
     return std::min(a1, b1) - std::max(a0, b0) > kSameDoorOverlap;
   };
-  // Each report joins the first door one of whose reports it is the same
-  // as; doors that a later report made the same are joined until none are.
-  std::vector<std::vector<DoorResult>> groups;
-  for (const DoorResult& d : reports) {
-    auto it = std::find_if(groups.begin(), groups.end(), [&](const std::vector<DoorResult>& g) {
-      return std::any_of(g.begin(), g.end(), [&](const DoorResult& o) { return same(o, d); });
-    });
-    if (it == groups.end()) groups.push_back({d});
-    else it->push_back(d);
-  }
-  auto groupsMeet = [&](const std::vector<DoorResult>& a, const std::vector<DoorResult>& b) {
-    for (const DoorResult& x : a)
-      for (const DoorResult& y : b)
-        if (same(x, y)) return true;
-    return false;
+  // A door's reports: the connected parts of `same` (a report the same as
+  // two others joins them), each in report order.
+  std::vector<std::size_t> part(reports.size());
+  for (std::size_t i = 0; i < part.size(); ++i) part[i] = i;
+  auto root = [&](std::size_t i) {
+    while (part[i] != i) i = part[i] = part[part[i]];
+    return i;
   };
-  for (bool joined = true; joined;) {
-    joined = false;
-    for (std::size_t m = 0; m < groups.size() && !joined; ++m)
-      for (std::size_t n = m + 1; n < groups.size() && !joined; ++n) {
-        if (!groupsMeet(groups[m], groups[n])) continue;
-        groups[m].insert(groups[m].end(), groups[n].begin(), groups[n].end());
-        groups.erase(groups.begin() + static_cast<long>(n));
-        joined = true;
+  for (std::size_t i = 0; i < reports.size(); ++i)
+    for (std::size_t j = i + 1; j < reports.size(); ++j)
+      if (same(reports[i], reports[j])) {
+        const std::size_t a = root(i), b = root(j);
+        part[std::max(a, b)] = std::min(a, b);
       }
+  std::vector<std::vector<DoorResult>> groups;
+  std::vector<int> group_of(reports.size(), -1);
+  for (std::size_t i = 0; i < reports.size(); ++i) {
+    int& g = group_of[root(i)];
+    if (g < 0) g = static_cast<int>(groups.size()), groups.emplace_back();
+    groups[static_cast<std::size_t>(g)].push_back(reports[i]);
   }
   // Of each door's reports the best (better()). (A station's free-space
   // bound is not a hard limit for a leaf measured from another: it assumes
