@@ -932,6 +932,32 @@ TEST(Stations, AStationBeyondEachDoorMeasuresTheLeavesSwungOutOfTheRoom) {
   }
 }
 
+TEST(Stations, ADoorwaySeenThroughBesideTheShadowOfItsLeafIsFoundInASparseScan) {
+  // Room 1001 surveyed from inside and from beyond its door, 50k rays a
+  // station (the beyond-100k sweep). Its leaf stands 73 deg open into the
+  // room behind the door, 0.6 m from the station there, and shadows the wall
+  // beyond its hinge; at 50k rays no face shows at the hinge jamb, so what
+  // is seen through the doorway and the shadow make one run 2.1 m wide, too
+  // wide for a door. The part seen through, beside the shadow, is the
+  // doorway: the station beyond measures the leaf (before: no door at all).
+  const Pipeline pipe{Parameters()};
+  const Survey sv = survey(1001, 1, 50000, true);
+  ASSERT_EQ(sv.scans.size(), 2u);
+  ASSERT_EQ(sv.truth["doors"].size(), 1u);
+  const PipelineResult beyond = pipe.run(sv.scans[1], false, sv.origins[1]);
+  const eval::EvalResult b = sv.score(beyond);
+  const eval::EvalResult e = sv.score(pipe.runStations(sv.stations(), false));
+  SCOPED_TRACE(::testing::Message() << "seed=1001 beyond:" << describe(beyond));
+  EXPECT_EQ(b.reported_doors, 1);
+  ASSERT_EQ(b.matched, 1);
+  EXPECT_FALSE(b.matches[0].angle_is_lower_bound);
+  EXPECT_LT(b.matches[0].angle_error_deg, 3.0);
+  EXPECT_LT(b.matches[0].hinge_error_m, 0.1);
+  EXPECT_TRUE(b.matches[0].state_correct);
+  EXPECT_EQ(e.matched, 1);
+  EXPECT_EQ(e.reported_doors, 1);
+}
+
 TEST(Stations, ReportsOfOneDoorFromBothFacesOfItsWallAreOneDoor) {
   // Room 1011 surveyed from inside and beyond each of its three doors,
   // 100k rays a station (as the beyond-400k sweep). The station beyond door

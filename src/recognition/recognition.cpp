@@ -653,6 +653,38 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     }
   }
 
+  // Sub-runs of columns [lo, hi] seen through (through or recess cells at
+  // least twice the shadowed ones over the body), bridging single columns
+  // of neither, with shadow (the reverse) on exactly one side, as [s0, s1).
+  auto throughBesideShadow = [&](int lo, int hi) {
+    auto kindOf = [&](int k) {  // 1 seen through, 2 shadow, 0 mixed, -1 nothing seen
+      int tr = 0, sh = 0;
+      for (int r = body0; r < body1; ++r) {
+        const Cell& g = grid[static_cast<std::size_t>(r) * cols + k];
+        if (g.face) continue;
+        tr += g.through || g.recess;
+        sh += g.front && !g.through && !g.recess;
+      }
+      if (tr + sh == 0) return -1;
+      return tr >= 2 * sh ? 1 : sh >= 2 * tr ? 2 : 0;
+    };
+    const int n = hi - lo + 1;
+    std::vector<int> kind(n);
+    for (int k = 0; k < n; ++k) kind[k] = kindOf(lo + k);
+    std::vector<std::pair<double, double>> parts;
+    for (int a = 0; a < n;) {
+      if (kind[a] != 1) {
+        ++a;
+        continue;
+      }
+      int b = a;
+      while (b + 1 < n && kind[b + 1] != 2 && (kind[b + 1] == 1 || (b + 2 < n && kind[b + 2] == 1))) ++b;
+      const bool shadow_before = a > 0 && kind[a - 1] == 2, shadow_after = b + 1 < n && kind[b + 1] == 2;
+      if (shadow_before != shadow_after) parts.push_back({colS(lo + a), colS(lo + b + 1)});
+      a = b + 1;
+    }
+    return parts;
+  };
   // (2) Openings: body without face but with evidence of what lies beyond.
   auto open = [&](int c) { return face[c] < 0.3 && expl[c] >= 0.4; };
   for (int c = 0; c < cols;) {
@@ -727,6 +759,15 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
         else addCandidate(s1 - p.door_max_width, s1, false);
         if (out.size() > before) out.back().shadow_end = true;
       }
+      // A run seen through over a door's width on one side and lying in the
+      // shadow of something in front on the other: a leaf swung towards the
+      // sensor, seen through its doorway, shadows the wall beyond its hinge,
+      // and a sparse scan may show no face at the hinge jamb between the two
+      // (the station beyond room 1001's door at 50k rays). The part seen
+      // through, beside the shadow, is a doorway candidate; the leaf search
+      // decides (and moves the hinge, as the shadow's edge is not the jamb).
+      const std::vector<std::pair<double, double>> parts = throughBesideShadow(lo, hi);
+      for (const auto& [a, b] : parts) addCandidate(a == colS(lo) ? s0 : a, b == colS(hi + 1) ? s1 : b, false);
     }
     c = e + 1;
   }
