@@ -14,6 +14,7 @@
 #include "door_state_recognition/io/cloud_reader.hpp"
 #include "door_state_recognition/io/report.hpp"
 #include "door_state_recognition/pipeline/pipeline.hpp"
+#include "door_state_recognition/pipeline/report_groups.hpp"
 #include "door_state_recognition/preprocess/preprocess.hpp"
 #include "door_state_recognition/recognition/recognition.hpp"
 #include "door_state_recognition/segmentation/segmentation.hpp"
@@ -956,6 +957,25 @@ TEST(Stations, ADoorwaySeenThroughBesideTheShadowOfItsLeafIsFoundInASparseScan) 
   EXPECT_TRUE(b.matches[0].state_correct);
   EXPECT_EQ(e.matched, 1);
   EXPECT_EQ(e.reported_doors, 1);
+}
+
+TEST(Stations, TwoDoorsOfOneStationAreNeverJoinedByAnotherStationsReport) {
+  using dsr::stations::groupReports;
+  // Reports 0 and 1: two doors side by side, seen from station 0. Report 2,
+  // from station 1, a doorway fitted wrongly across both (it overlaps each):
+  // it joins the first, and the two doors stay two.
+  auto overlapsBoth = [](std::size_t i, std::size_t j) { return (i == 2) != (j == 2); };
+  const auto g = groupReports({0, 0, 1}, overlapsBoth);
+  ASSERT_EQ(g.size(), 2u);
+  EXPECT_EQ(g[0], (std::vector<std::size_t>{0, 2}));
+  EXPECT_EQ(g[1], (std::vector<std::size_t>{1}));
+  // Reports of three stations in a chain (0 the same as 1, 1 as 2) are one
+  // door: the groups are the connected parts of `same`.
+  auto chain = [](std::size_t i, std::size_t j) { return (i > j ? i - j : j - i) == 1; };
+  EXPECT_EQ(groupReports({0, 1, 2}, chain).size(), 1u);
+  // ... but not when the chain's ends are two reports of one station.
+  EXPECT_EQ(groupReports({0, 1, 0}, chain).size(), 2u);
+  EXPECT_TRUE(groupReports({}, chain).empty());
 }
 
 TEST(Stations, ReportsOfOneDoorFromBothFacesOfItsWallAreOneDoor) {

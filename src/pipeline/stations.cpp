@@ -5,11 +5,13 @@
 // reported once, from the station whose scan measured its leaf best.
 #include <algorithm>
 #include <chrono>
+#include <iterator>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
 #include "door_state_recognition/pipeline/pipeline.hpp"
+#include "door_state_recognition/pipeline/report_groups.hpp"
 #include "door_state_recognition/preprocess/preprocess.hpp"
 #include "door_state_recognition/recognition/recognition.hpp"
 #include "door_state_recognition/reconstruction/reconstruction.hpp"
@@ -189,6 +191,7 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
 
   // Doors: one per doorway, the best report of it.
   std::vector<DoorResult> reports;
+  std::vector<int> report_station;
   for (std::size_t k = 0; k < runs.size(); ++k)
     for (DoorResult d : runs[k].doors) {
       if (d.wall_id) d.wall_id = wall_map[k][*d.wall_id];
@@ -197,6 +200,7 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
         d.swing = (stations[0].viewpoint - d.opening_center).dot(d.wall_normal) > 0 ? Swing::TowardViewer
                                                                                     : Swing::AwayFromViewer;
       reports.push_back(d);
+      report_station.push_back(static_cast<int>(k));
     }
   // One doorway: centres close, or the doorways overlapping along one wall,
   // or along the two faces of one wall (parallel, the doorways' centres, each
@@ -220,26 +224,13 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
     const auto [b0, b1] = span(d);
     return std::min(a1, b1) - std::max(a0, b0) > kSameDoorOverlap;
   };
-  // A door's reports: the connected parts of `same` (a report the same as
-  // two others joins them), each in report order.
-  std::vector<std::size_t> part(reports.size());
-  for (std::size_t i = 0; i < part.size(); ++i) part[i] = i;
-  auto root = [&](std::size_t i) {
-    while (part[i] != i) i = part[i] = part[part[i]];
-    return i;
-  };
-  for (std::size_t i = 0; i < reports.size(); ++i)
-    for (std::size_t j = i + 1; j < reports.size(); ++j)
-      if (same(reports[i], reports[j])) {
-        const std::size_t a = root(i), b = root(j);
-        part[std::max(a, b)] = std::min(a, b);
-      }
+  // A door's reports: the connected parts of `same`, never joining two
+  // doors of one station (groupReports).
   std::vector<std::vector<DoorResult>> groups;
-  std::vector<int> group_of(reports.size(), -1);
-  for (std::size_t i = 0; i < reports.size(); ++i) {
-    int& g = group_of[root(i)];
-    if (g < 0) g = static_cast<int>(groups.size()), groups.emplace_back();
-    groups[static_cast<std::size_t>(g)].push_back(reports[i]);
+  for (const std::vector<std::size_t>& g :
+       stations::groupReports(report_station, [&](std::size_t i, std::size_t j) { return same(reports[i], reports[j]); })) {
+    groups.emplace_back();
+    for (std::size_t i : g) groups.back().push_back(reports[i]);
   }
   // Of each door's reports the best (better()). (A station's free-space
   // bound is not a hard limit for a leaf measured from another: it assumes
@@ -307,5 +298,44 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
                              std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   return res;
 }
+
+
+namespace stations {
+
+std::vector<std::vector<std::size_t>> groupReports(const std::vector<int>& station_of,
+                                                   const std::function<bool(std::size_t, std::size_t)>& same) {
+  const std::size_t n = station_of.size();
+  std::vector<std::size_t> part(n);
+  std::vector<std::vector<int>> held(n);  // the stations of a part's reports, at its root, sorted
+  for (std::size_t i = 0; i < n; ++i) part[i] = i, held[i] = {station_of[i]};
+  auto root = [&](std::size_t i) {
+    while (part[i] != i) i = part[i] = part[part[i]];
+    return i;
+  };
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 1; j < n; ++j) {
+      const std::size_t a = root(i), b = root(j);
+      if (a == b || !same(i, j)) continue;
+      std::vector<int> both;
+      std::set_intersection(held[a].begin(), held[a].end(), held[b].begin(), held[b].end(), std::back_inserter(both));
+      if (!both.empty()) continue;
+      const std::size_t to = std::min(a, b), from = std::max(a, b);
+      part[from] = to;
+      std::vector<int> merged;
+      std::merge(held[a].begin(), held[a].end(), held[b].begin(), held[b].end(), std::back_inserter(merged));
+      held[to].swap(merged);
+      held[from].clear();
+    }
+  std::vector<std::vector<std::size_t>> groups;
+  std::vector<int> group_of(n, -1);
+  for (std::size_t i = 0; i < n; ++i) {
+    int& g = group_of[root(i)];
+    if (g < 0) g = static_cast<int>(groups.size()), groups.emplace_back();
+    groups[static_cast<std::size_t>(g)].push_back(i);
+  }
+  return groups;
+}
+
+}  // namespace stations
 
 }  // namespace dsr
