@@ -737,6 +737,22 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       std::sort(right.begin(), right.end());
       s1 = right[right.size() * 3 / 100];
     }
+    // A run seen through over a door's width on one side and lying in the
+    // shadow of something in front on the other: a leaf swung towards the
+    // sensor, seen through its doorway, shadows the wall beyond its hinge,
+    // and a sparse scan may show no face at the hinge jamb between the two
+    // (the station beyond room 1001's door at 50k rays). The part seen
+    // through, beside the shadow, is a doorway candidate; the leaf search
+    // decides (and moves the hinge, as the shadow's edge is not the jamb).
+    auto addPartsSeenThrough = [&]() {
+      for (const auto& [a, b] : throughBesideShadow(lo, hi))
+        addCandidate(a == colS(lo) ? s0 : a, b == colS(hi + 1) ? s1 : b, false);
+    };
+    // A run a little wider than a door is itself a candidate, which would
+    // take the place of a part overlapping it: the parts go first (1027 at
+    // 50k rays: a doorway and its leaf's shadow 1.50 m wide, the leaf fitted
+    // 28 deg off across both and the doorway refused as too wide).
+    if (d_view > 0.1 && s1 - s0 > p.door_max_width && s1 - s0 <= p.door_max_width + 0.1) addPartsSeenThrough();
     addCandidate(s0, s1, false);
     // A run wider than any door, hidden from the sensor by something in
     // front: a leaf swung towards the sensor shadows its doorway and the wall
@@ -759,15 +775,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
         else addCandidate(s1 - p.door_max_width, s1, false);
         if (out.size() > before) out.back().shadow_end = true;
       }
-      // A run seen through over a door's width on one side and lying in the
-      // shadow of something in front on the other: a leaf swung towards the
-      // sensor, seen through its doorway, shadows the wall beyond its hinge,
-      // and a sparse scan may show no face at the hinge jamb between the two
-      // (the station beyond room 1001's door at 50k rays). The part seen
-      // through, beside the shadow, is a doorway candidate; the leaf search
-      // decides (and moves the hinge, as the shadow's edge is not the jamb).
-      const std::vector<std::pair<double, double>> parts = throughBesideShadow(lo, hi);
-      for (const auto& [a, b] : parts) addCandidate(a == colS(lo) ? s0 : a, b == colS(hi + 1) ? s1 : b, false);
+      addPartsSeenThrough();
     }
     c = e + 1;
   }
