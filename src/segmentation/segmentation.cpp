@@ -541,6 +541,8 @@ constexpr int kMinRansacIterations = 20;
 // round is too small to hand to the other thread: waiting for it could cost
 // more (a thread of a loaded machine waits for its turn on a core).
 constexpr std::size_t kTaskSample = 4000, kTaskInliers = 1000;
+// A pool of this many points or more has its inliers found in two halves at once.
+constexpr std::size_t kTaskPool = 20000;
 
 // Of the n sample points (x, y, normal nx_i, ny_i), those within wd of the
 // line through (qx, qy) with normal (nx, ny) whose normal agrees (|n . n_i|
@@ -707,10 +709,40 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
           }
         }
       };
-      for (int pass = 0; pass < 3; ++pass) {
+      // The inliers of the whole pool: a large pool in two halves at once,
+      // the second as a task into lists of its own (moved out when done: the
+      // ends of lists side by side would share cache lines between the
+      // cores), appended after the first's: the lists of one pass. A task
+      // group waits for that task alone, not for the rounds' rules (tasks).
+      std::vector<int> inl_second;
+      std::vector<Eigen::Vector2d> q2_second;
+      auto allInliers = [&] {
         inl.clear();
         q2.clear();
-        inliersOf(0, pool.size(), inl, q2);
+        if (pool.size() < kTaskPool) {
+          inliersOf(0, pool.size(), inl, q2);
+          return;
+        }
+        const std::size_t mid = pool.size() / 2;
+#pragma omp taskgroup
+        {
+#pragma omp task default(shared)
+          {
+            std::vector<int> in;
+            std::vector<Eigen::Vector2d> q;
+            in.reserve(pool.size() - mid);
+            q.reserve(pool.size() - mid);
+            inliersOf(mid, pool.size(), in, q);
+            inl_second.swap(in);
+            q2_second.swap(q);
+          }
+          inliersOf(0, mid, inl, q2);
+        }
+        inl.insert(inl.end(), inl_second.begin(), inl_second.end());
+        q2.insert(q2.end(), q2_second.begin(), q2_second.end());
+      };
+      for (int pass = 0; pass < 3; ++pass) {
+        allInliers();
         if (q2.size() < 3 || pass == 2) break;
         Eigen::Vector2d c, dir;
         fitLine(q2, c, dir);
