@@ -5,6 +5,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <cstddef>
 #include <limits>
 #include <memory>
 #include <cmath>
@@ -98,6 +99,32 @@ struct Eigen3 {
 
 }  // namespace
 
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define DSR_NEIGHBOUR_MOMENTS_AVX2 1
+// To acc (10 doubles) the 10 doubles of each cell around cell c (m + 10 o
+// for cell o), in forEachNeighbourCell's order, with AVX2 (no FMA): each
+// lane adds as the scalar loop adds, in the same order, the same sums.
+__attribute__((target("avx2"))) void addNeighbourMomentsAvx2(const NeighbourGrid& grid, std::size_t c, const double* m,
+                                                              double* acc) {
+  std::uint32_t around[27];
+  int count = 0;
+  grid.forEachNeighbourCell(c, [&](std::uint32_t o) { around[count++] = o; });
+  __m256d a0 = _mm256_loadu_pd(acc), a1 = _mm256_loadu_pd(acc + 4);
+  __m128d a2 = _mm_loadu_pd(acc + 8);
+  for (int k = 0; k < count; ++k) {
+    const double* b = m + 10 * static_cast<std::size_t>(around[k]);
+    a0 = _mm256_add_pd(a0, _mm256_loadu_pd(b));
+    a1 = _mm256_add_pd(a1, _mm256_loadu_pd(b + 4));
+    a2 = _mm_add_pd(a2, _mm_loadu_pd(b + 8));
+  }
+  _mm256_storeu_pd(acc, a0);
+  _mm256_storeu_pd(acc + 4, a1);
+  _mm_storeu_pd(acc + 8, a2);
+  // Upper halves of the vector registers cleared before returning to SSE code.
+  _mm256_zeroupper();
+}
+#endif
+
 Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, const Eigen::Vector3f& viewpoint) {
   Normals out;
   out.n.assign(points.size(), Eigen::Vector3f::Zero());
@@ -126,6 +153,10 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
       q[3] += d.y() * d.y(), q[4] += d.y() * d.z(), q[5] += d.z() * d.z();
     }
   };
+  // n, s and q side by side: ten doubles (read as such by addNeighbourMomentsAvx2).
+  static_assert(sizeof(Moments) == 10 * sizeof(double) && offsetof(Moments, s) == sizeof(double) &&
+                    offsetof(Moments, q) == 4 * sizeof(double),
+                "moments: ten doubles");
   const std::size_t cells = grid.cells();
   const Eigen::Vector3d origin = points.front().cast<double>();
   std::vector<Moments> m(cells);
@@ -242,6 +273,9 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
       coarse[i] = finish(e);
     }
   }
+#ifdef DSR_NEIGHBOUR_MOMENTS_AVX2
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+#endif
   // Fine cells take the coarse normal where it is planar (most of a room);
   // near edges, corners and thin parts the 3 x 3 x 3 fine cells around.
 #pragma omp parallel
@@ -251,7 +285,12 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
       Pca r = coarse[coarse_of[c]];
       if (!r.ok || r.curvature > kRefineCurvature) {
         Moments acc;
-        grid.forEachNeighbourCell(static_cast<std::size_t>(c), [&](std::uint32_t o) { acc.add(m[o]); });
+#ifdef DSR_NEIGHBOUR_MOMENTS_AVX2
+        if (avx2)
+          addNeighbourMomentsAvx2(grid, static_cast<std::size_t>(c), &m[0].n, &acc.n);
+        else
+#endif
+          grid.forEachNeighbourCell(static_cast<std::size_t>(c), [&](std::uint32_t o) { acc.add(m[o]); });
         if (acc.n >= need) {
           r = pca(acc);
         } else if (coarse_unknown[coarse_of[c]]) {
