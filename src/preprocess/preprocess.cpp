@@ -181,6 +181,13 @@ bool downsampleDense(long long n, const PointAt& point, const std::vector<std::u
   };
   auto fill = [&](Half& h, long long i0, long long i1) {
     h.brick.assign(static_cast<std::size_t>(volume), CellMap::kNone);
+    // Room for a cell per point (only what is used is touched): the lists
+    // never move as they grow.
+    const std::size_t most = static_cast<std::size_t>(i1 - i0);
+    h.sum.reserve(most);
+    h.count.reserve(most);
+    h.keys.reserve(most);
+    h.cell.reserve(64 * std::min(most, static_cast<std::size_t>(volume)));
     std::uint64_t last_key = kNoKey;
     std::uint32_t last_id = 0;
     for (long long i = i0; i < i1; ++i) {
