@@ -144,26 +144,47 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   watch.mark("level");
 
   // --- segmentation -----------------------------------------------------------
-  const segmentation::FloorCeiling fc = segmentation::findFloorCeiling(pts, normals, p, viewpoint.z());
+  // The floor and ceiling, and on the other core the heights of the
+  // vertical structure with its foot and top: two ranks (a rank's value is
+  // the same whether the whole is sorted or only selected, and whatever
+  // was selected before), used where no floor or no ceiling is found.
+  segmentation::FloorCeiling fc;
+  std::vector<float> vertical_z;
+  float foot_z = 0, head_z = 0;
+  {
+    util::FirstError error;
+#pragma omp parallel
+#pragma omp single
+    {
+#pragma omp task shared(vertical_z, foot_z, head_z, error)
+      error.run([&] {
+        std::vector<float> vz;
+        vz.reserve(pts.size());
+        for (std::size_t i = 0; i < pts.size(); ++i)
+          if (std::abs(normals.n[i].z()) < p.vertical_normal_z) vz.push_back(pts[i].z());
+        if (vz.size() >= 20) {
+          auto rank = [&](std::size_t k) {
+            std::nth_element(vz.begin(), vz.begin() + k, vz.end());
+            return vz[k];
+          };
+          foot_z = rank(vz.size() / 200);
+          head_z = rank(vz.size() - 1 - vz.size() / 200);
+        }
+        vertical_z.swap(vz);
+      });
+      error.run([&] { fc = segmentation::findFloorCeiling(pts, normals, p, viewpoint.z()); });
+    }
+    error.rethrow();
+  }
   res.floor = fc.floor;
   res.ceiling = fc.ceiling;
-  std::vector<float> vertical_z;
-  vertical_z.reserve(pts.size());
-  for (std::size_t i = 0; i < pts.size(); ++i)
-    if (std::abs(normals.n[i].z()) < p.vertical_normal_z) vertical_z.push_back(pts[i].z());
   if (vertical_z.size() < 20) {
     res.warnings.push_back("no vertical structure: no walls");
     watch.total();
     return res;
   }
-  // The foot and the top of the vertical structure: two ranks (a rank's value
-  // is the same whether the whole is sorted or only selected).
-  auto rank = [&](std::size_t k) {
-    std::nth_element(vertical_z.begin(), vertical_z.begin() + k, vertical_z.end());
-    return vertical_z[k];
-  };
-  double floor_z = fc.floor ? *fc.floor : rank(vertical_z.size() / 200);
-  double top_z = fc.ceiling ? *fc.ceiling : rank(vertical_z.size() - 1 - vertical_z.size() / 200);
+  double floor_z = fc.floor ? *fc.floor : foot_z;
+  double top_z = fc.ceiling ? *fc.ceiling : head_z;
   if (!fc.floor) res.warnings.push_back("no floor in view: floor taken at the foot of the vertical structure");
   if (!fc.ceiling) res.warnings.push_back("no ceiling in view: wall height taken from the top of the vertical structure");
   watch.mark("floor_ceiling");
