@@ -100,70 +100,90 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   // Cells of 1.5 voxels: a neighbourhood of 3 x 3 x 3 cells, 4.5 voxels wide,
   // holds normal_k points or more of a surface thinned to the voxel size even
   // where the scan is sparser than the voxel grid.
-  // A camera frame's pixels without a return (rays along which nothing was
-  // in range) depend on the input alone: found on the other core while this
-  // one builds the grid.
-  segmentation::NeighbourGrid grid;
+  segmentation::NeighbourGrid grid(thinned, static_cast<float>(1.5 * std::max(p.voxel_size, 0.01)));
+  segmentation::Normals normals = segmentation::estimateNormals(thinned, grid, p.normal_k, viewpoint_in.cast<float>());
+  watch.mark("normals");
+
+  // --- levelling: the up axis given (and refined) or estimated ---------------
+  // Levelling and the floor and ceiling on this core, and on the other:
+  // a camera frame's pixels without a return (rays along which nothing was
+  // in range), which depend on the input alone (where the grid was built
+  // they took the core its halves would use), then the heights of the
+  // vertical structure with its foot and top: two ranks (a rank's value is
+  // the same whether the whole is sorted or only selected, and whatever was
+  // selected before), used where no floor or no ceiling is found.
   preprocess::Points no_return;
+  Eigen::Matrix3f R;
+  preprocess::Points pts;
+  Eigen::Vector3f viewpoint;
+  segmentation::FloorCeiling fc;
+  std::vector<float> vertical_z;
+  float foot_z = 0, head_z = 0;
+  bool levelled = false;
   {
     util::FirstError error;
-#pragma omp parallel if (organized)
+#pragma omp parallel
 #pragma omp single
     {
       if (organized) {
 #pragma omp task shared(no_return, error)
         error.run([&] { no_return = preprocess::noReturnRays(cloud, viewpoint_in.cast<float>()); });
       }
-      error.run([&] { grid = segmentation::NeighbourGrid(thinned, static_cast<float>(1.5 * std::max(p.voxel_size, 0.01))); });
+      error.run([&] {
+        std::optional<Eigen::Vector3d> up = preprocess::parseUpAxis(p.up_axis);
+        if (!up) {
+          up = preprocess::estimateUp(thinned, normals.n, static_cast<unsigned>(p.random_seed));
+          if (up) up = preprocess::refineUp(*up, normals.n, 10.0);
+        } else if (p.refine_up_deg > 0) {
+          up = preprocess::refineUp(*up, normals.n, p.refine_up_deg);
+        }
+        if (!up) {
+          res.warnings.push_back("up axis could not be estimated; using +z");
+          up = Eigen::Vector3d::UnitZ();
+        }
+        res.up = up->normalized();
+        R = preprocess::levellingRotation(res.up).cast<float>();
+        pts.resize(thinned.size());
+        for (std::size_t i = 0; i < pts.size(); ++i) {
+          pts[i] = R * thinned[i];
+          normals.n[i] = R * normals.n[i];
+        }
+        viewpoint = R * viewpoint_in.cast<float>();
+        watch.mark("level");
+        levelled = true;
+      });
+      // --- segmentation -----------------------------------------------------------
+      if (levelled) {
+#pragma omp task shared(vertical_z, foot_z, head_z, error)
+        error.run([&] {
+          std::vector<float> vz;
+          vz.reserve(pts.size());
+          for (std::size_t i = 0; i < pts.size(); ++i)
+            if (std::abs(normals.n[i].z()) < p.vertical_normal_z) vz.push_back(pts[i].z());
+          if (vz.size() >= 20) {
+            auto rank = [&](std::size_t k) {
+              std::nth_element(vz.begin(), vz.begin() + k, vz.end());
+              return vz[k];
+            };
+            foot_z = rank(vz.size() / 200);
+            head_z = rank(vz.size() - 1 - vz.size() / 200);
+          }
+          vertical_z.swap(vz);
+        });
+        error.run([&] { fc = segmentation::findFloorCeiling(pts, normals, p, viewpoint.z()); });
+      }
     }
     error.rethrow();
   }
-  segmentation::Normals normals = segmentation::estimateNormals(thinned, grid, p.normal_k, viewpoint_in.cast<float>());
-  watch.mark("normals");
-
-  // --- levelling: the up axis given (and refined) or estimated ---------------
-  std::optional<Eigen::Vector3d> up = preprocess::parseUpAxis(p.up_axis);
-  if (!up) {
-    up = preprocess::estimateUp(thinned, normals.n, static_cast<unsigned>(p.random_seed));
-    if (up) up = preprocess::refineUp(*up, normals.n, 10.0);
-  } else if (p.refine_up_deg > 0) {
-    up = preprocess::refineUp(*up, normals.n, p.refine_up_deg);
-  }
-  if (!up) {
-    res.warnings.push_back("up axis could not be estimated; using +z");
-    up = Eigen::Vector3d::UnitZ();
-  }
-  res.up = up->normalized();
-  const Eigen::Matrix3f R = preprocess::levellingRotation(res.up).cast<float>();
-  preprocess::Points pts(thinned.size());
-  for (std::size_t i = 0; i < pts.size(); ++i) {
-    pts[i] = R * thinned[i];
-    normals.n[i] = R * normals.n[i];
-  }
-  const Eigen::Vector3f viewpoint = R * viewpoint_in.cast<float>();
-  watch.mark("level");
-
-  // --- segmentation -----------------------------------------------------------
-  const segmentation::FloorCeiling fc = segmentation::findFloorCeiling(pts, normals, p, viewpoint.z());
   res.floor = fc.floor;
   res.ceiling = fc.ceiling;
-  std::vector<float> vertical_z;
-  vertical_z.reserve(pts.size());
-  for (std::size_t i = 0; i < pts.size(); ++i)
-    if (std::abs(normals.n[i].z()) < p.vertical_normal_z) vertical_z.push_back(pts[i].z());
   if (vertical_z.size() < 20) {
     res.warnings.push_back("no vertical structure: no walls");
     watch.total();
     return res;
   }
-  // The foot and the top of the vertical structure: two ranks (a rank's value
-  // is the same whether the whole is sorted or only selected).
-  auto rank = [&](std::size_t k) {
-    std::nth_element(vertical_z.begin(), vertical_z.begin() + k, vertical_z.end());
-    return vertical_z[k];
-  };
-  double floor_z = fc.floor ? *fc.floor : rank(vertical_z.size() / 200);
-  double top_z = fc.ceiling ? *fc.ceiling : rank(vertical_z.size() - 1 - vertical_z.size() / 200);
+  double floor_z = fc.floor ? *fc.floor : foot_z;
+  double top_z = fc.ceiling ? *fc.ceiling : head_z;
   if (!fc.floor) res.warnings.push_back("no floor in view: floor taken at the foot of the vertical structure");
   if (!fc.ceiling) res.warnings.push_back("no ceiling in view: wall height taken from the top of the vertical structure");
   watch.mark("floor_ceiling");

@@ -13,6 +13,9 @@
 #ifdef _OPENMP
 #include <omp.h>
 #endif
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#include <immintrin.h>
+#endif
 
 #include "door_state_recognition/preprocess/cell_map.hpp"
 
@@ -178,6 +181,13 @@ bool downsampleDense(long long n, const PointAt& point, const std::vector<std::u
   };
   auto fill = [&](Half& h, long long i0, long long i1) {
     h.brick.assign(static_cast<std::size_t>(volume), CellMap::kNone);
+    // Room for a cell per point (only what is used is touched): the lists
+    // never move as they grow.
+    const std::size_t most = static_cast<std::size_t>(i1 - i0);
+    h.sum.reserve(most);
+    h.count.reserve(most);
+    h.keys.reserve(most);
+    h.cell.reserve(64 * std::min(most, static_cast<std::size_t>(volume)));
     std::uint64_t last_key = kNoKey;
     std::uint32_t last_id = 0;
     for (long long i = i0; i < i1; ++i) {
@@ -324,6 +334,105 @@ Points downsample(long long n, const PointAt& point, const std::vector<std::uint
   return out;
 }
 
+// The bounds of the valid points' cells (unpacked from their keys).
+struct KeyBounds {
+  int lo[3] = {std::numeric_limits<int>::max(), std::numeric_limits<int>::max(), std::numeric_limits<int>::max()};
+  int hi[3] = {-std::numeric_limits<int>::max(), -std::numeric_limits<int>::max(), -std::numeric_limits<int>::max()};
+};
+
+// The voxel key of each of the n points (kNoKey where sanitize would drop
+// the point), their cells' bounds into b; returns how many are valid.
+long long keysScalar(const pcl::PointXYZ* pts, long long n, double inv, float lim, std::uint64_t* key, KeyBounds& b) {
+  long long valid = 0;
+  for (long long i = 0; i < n; ++i) {
+    const pcl::PointXYZ& p = pts[i];
+    // The test of sanitize.
+    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && std::abs(p.x) <= lim &&
+        std::abs(p.y) <= lim && std::abs(p.z) <= lim) {
+      const Eigen::Vector3i c = cellOf(Eigen::Vector3f(p.x, p.y, p.z), inv);
+      key[i] = packCell(c.x(), c.y(), c.z());
+      const Eigen::Vector3i u = unpackCell(key[i]);
+      for (int a = 0; a < 3; ++a) b.lo[a] = std::min(b.lo[a], u[a]), b.hi[a] = std::max(b.hi[a], u[a]);
+      ++valid;
+    } else {
+      key[i] = kNoKey;
+    }
+  }
+  return valid;
+}
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define DSR_KEYS_AVX2 1
+// keysScalar four points at a time on a CPU with AVX2 (AVX2 alone, no FMA):
+// in each lane the same float tests (|v| < inf is isfinite, NaN failing
+// both), the same double product, truncation and floorToInt's correction
+// (cvttpd gives INT_MIN out of range, as cvttsd2si does), the same 21-bit
+// fields packed and sign-extended back; the same keys, bounds and count.
+__attribute__((target("avx2"))) long long keysAvx2(const pcl::PointXYZ* pts, long long n, double inv, float lim,
+                                                   std::uint64_t* key, KeyBounds& b) {
+  static_assert(sizeof(pcl::PointXYZ) == 16, "x, y, z and a pad float");
+  long long valid = 0, i = 0;
+  const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+  const __m128 vinf = _mm_set1_ps(std::numeric_limits<float>::infinity()), vlim = _mm_set1_ps(lim);
+  const __m256d vinv = _mm256_set1_pd(inv);
+  const __m128i int_min = _mm_set1_epi32(std::numeric_limits<int>::min()), m21 = _mm_set1_epi32(0x1FFFFF);
+  const __m256i even = _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6), no_key = _mm256_set1_epi64x(static_cast<long long>(kNoKey));
+  __m128i lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) lo[a] = _mm_set1_epi32(b.lo[a]), hi[a] = _mm_set1_epi32(b.hi[a]);
+  for (; i + 4 <= n; i += 4) {
+    __m128 r0 = _mm_loadu_ps(&pts[i].x), r1 = _mm_loadu_ps(&pts[i + 1].x), r2 = _mm_loadu_ps(&pts[i + 2].x),
+           r3 = _mm_loadu_ps(&pts[i + 3].x);
+    _MM_TRANSPOSE4_PS(r0, r1, r2, r3);  // r0: the x of the four, r1: y, r2: z
+    const __m128 v[3] = {r0, r1, r2};
+    __m128 ok = _mm_castsi128_ps(_mm_set1_epi32(-1));
+    __m128i c[3];
+    for (int a = 0; a < 3; ++a) {
+      const __m128 av = _mm_and_ps(v[a], abs_mask);
+      ok = _mm_and_ps(ok, _mm_and_ps(_mm_cmplt_ps(av, vinf), _mm_cmple_ps(av, vlim)));
+      const __m256d d = _mm256_mul_pd(_mm256_cvtps_pd(v[a]), vinv);
+      const __m128i t = _mm256_cvttpd_epi32(d);
+      const __m256d below = _mm256_cmp_pd(d, _mm256_cvtepi32_pd(t), _CMP_LT_OQ);
+      const __m128i below32 = _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(_mm256_castpd_si256(below), even));
+      c[a] = _mm_add_epi32(t, _mm_andnot_si128(_mm_cmpeq_epi32(t, int_min), below32));  // t - 1 where below
+    }
+    const __m128i ok32 = _mm_castps_si128(ok);
+    const int bits = _mm_movemask_ps(ok);
+    if (bits == 0) {
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(key + i), no_key);
+      continue;
+    }
+    valid += __builtin_popcount(static_cast<unsigned>(bits));
+    const __m256i k = _mm256_or_si256(
+        _mm256_or_si256(_mm256_cvtepu32_epi64(_mm_and_si128(c[0], m21)),
+                        _mm256_slli_epi64(_mm256_cvtepu32_epi64(_mm_and_si128(c[1], m21)), 21)),
+        _mm256_slli_epi64(_mm256_cvtepu32_epi64(_mm_and_si128(c[2], m21)), 42));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(key + i), _mm256_blendv_epi8(no_key, k, _mm256_cvtepi32_epi64(ok32)));
+    for (int a = 0; a < 3; ++a) {
+      const __m128i u = _mm_srai_epi32(_mm_slli_epi32(c[a], 11), 11);  // unpackCell's axis
+      lo[a] = _mm_blendv_epi8(lo[a], _mm_min_epi32(lo[a], u), ok32);
+      hi[a] = _mm_blendv_epi8(hi[a], _mm_max_epi32(hi[a], u), ok32);
+    }
+  }
+  for (int a = 0; a < 3; ++a) {
+    alignas(16) int l[4], h[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(l), lo[a]);
+    _mm_store_si128(reinterpret_cast<__m128i*>(h), hi[a]);
+    for (int j = 0; j < 4; ++j) b.lo[a] = std::min(b.lo[a], l[j]), b.hi[a] = std::max(b.hi[a], h[j]);
+  }
+  // Upper halves of the vector registers cleared before returning to SSE code.
+  _mm256_zeroupper();
+  return valid + keysScalar(pts + i, n - i, inv, lim, key + i, b);
+}
+#endif
+
+long long keysOf(const pcl::PointXYZ* pts, long long n, double inv, float lim, std::uint64_t* key, KeyBounds& b) {
+#ifdef DSR_KEYS_AVX2
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  if (avx2) return keysAvx2(pts, n, inv, lim, key, b);
+#endif
+  return keysScalar(pts, n, inv, lim, key, b);
+}
+
 }  // namespace
 
 Points voxelDownsample(const Points& points, double leaf) {
@@ -353,22 +462,16 @@ Points sanitizeAndDownsample(const pcl::PointCloud<pcl::PointXYZ>& cloud, double
   long long valid = 0;
   // The keys' bounding box too (for the dense index), in the same pass.
   int lx = std::numeric_limits<int>::max(), ly = lx, lz = lx, hx = -lx, hy = -lx, hz = -lx;
-#pragma omp parallel for schedule(dynamic, 16384) reduction(+ : valid) reduction(min : lx, ly, lz) \
+  constexpr long long kBlock = 16384;
+  const long long blocks = (n + kBlock - 1) / kBlock;
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : valid) reduction(min : lx, ly, lz) \
     reduction(max : hx, hy, hz) if (n >= 50000)
-  for (long long i = 0; i < n; ++i) {
-    const pcl::PointXYZ& p = cloud.points[i];
-    // The test of sanitize.
-    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && std::abs(p.x) <= lim &&
-        std::abs(p.y) <= lim && std::abs(p.z) <= lim) {
-      const Eigen::Vector3i c = cellOf(Eigen::Vector3f(p.x, p.y, p.z), inv);
-      key[i] = packCell(c.x(), c.y(), c.z());
-      const Eigen::Vector3i u = unpackCell(key[i]);
-      lx = std::min(lx, u.x()), ly = std::min(ly, u.y()), lz = std::min(lz, u.z());
-      hx = std::max(hx, u.x()), hy = std::max(hy, u.y()), hz = std::max(hz, u.z());
-      ++valid;
-    } else {
-      key[i] = kNoKey;
-    }
+  for (long long b = 0; b < blocks; ++b) {
+    KeyBounds kb;
+    const long long i0 = b * kBlock, i1 = std::min(n, i0 + kBlock);
+    valid += keysOf(cloud.points.data() + i0, i1 - i0, inv, lim, key.data() + i0, kb);
+    lx = std::min(lx, kb.lo[0]), ly = std::min(ly, kb.lo[1]), lz = std::min(lz, kb.lo[2]);
+    hx = std::max(hx, kb.hi[0]), hy = std::max(hy, kb.hi[1]), hz = std::max(hz, kb.hi[2]);
   }
   if (kept) *kept = static_cast<std::size_t>(valid);
   const KeyBox box{Eigen::Vector3i(lx, ly, lz), Eigen::Vector3i(hx, hy, hz), valid > 0};

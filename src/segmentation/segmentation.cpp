@@ -5,6 +5,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <cstddef>
 #include <limits>
 #include <memory>
 #include <cmath>
@@ -41,6 +42,89 @@ constexpr double kGapUnknown = 0.1;
 // cos 15 deg: planes closer to parallel than this may shadow one another.
 constexpr double kNearParallel = 0.966;
 
+namespace {
+
+// SelfAdjointEigenSolver<Matrix3d>::computeDirect as Eigen 3.4 runs it (its
+// own computeRoots and extract_kernel, step for step), split in two and
+// trimmed to what the normals read: values() the eigenvalues (eivals), then
+// vector0() the eigenvector of the smallest (eivecs.col(0)), the same bits
+// as computeDirect's. Not computed: column 1 (Eigen's cross product of the
+// others, normalised, last) and, where column 0 comes first (its eigenvalue
+// the most distinct), column 2, which Eigen works out after it without
+// changing it.
+struct Eigen3 {
+  using Direct = Eigen::internal::direct_selfadjoint_eigenvalues<Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>, 3, false>;
+  Eigen::Matrix3d scaled, eivecs;
+  Eigen::Vector3d roots, eivals;  // of scaled; of the matrix
+  void values(const Eigen::Matrix3d& mat) {
+    const double shift = mat.trace() / 3.0;
+    scaled = mat.template selfadjointView<Eigen::Lower>();
+    scaled.diagonal().array() -= shift;
+    const double scale = scaled.cwiseAbs().maxCoeff();
+    if (scale > 0) scaled /= scale;
+    Direct::computeRoots(scaled, roots);
+    eivals = roots;
+    eivals *= scale;
+    eivals.array() += shift;
+  }
+  void vector0() {
+    const Eigen::Vector3d& ev = roots;
+    if ((ev(2) - ev(0)) <= Eigen::NumTraits<double>::epsilon()) {
+      eivecs.setIdentity();
+      return;
+    }
+    Eigen::Matrix3d tmp;
+    tmp = scaled;
+    double d0 = ev(2) - ev(1);
+    const double d1 = ev(1) - ev(0);
+    Eigen::Index k(0), l(2);
+    if (d0 > d1) {
+      std::swap(k, l);
+      d0 = d1;
+    }
+    tmp.diagonal().array() -= ev(k);
+    Direct::extract_kernel(tmp, eivecs.col(k), eivecs.col(l));
+    if (k == 0) return;
+    if (d0 <= 2 * Eigen::NumTraits<double>::epsilon() * d1) {
+      eivecs.col(l) -= eivecs.col(k).dot(eivecs.col(l)) * eivecs.col(l);
+      eivecs.col(l).normalize();
+    } else {
+      tmp = scaled;
+      tmp.diagonal().array() -= ev(l);
+      Eigen::Vector3d dummy;
+      Direct::extract_kernel(tmp, eivecs.col(l), dummy);
+    }
+  }
+};
+
+}  // namespace
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define DSR_NEIGHBOUR_MOMENTS_AVX2 1
+// To acc (10 doubles) the 10 doubles of each cell around cell c (m + 10 o
+// for cell o), in forEachNeighbourCell's order, with AVX2 (no FMA): each
+// lane adds as the scalar loop adds, in the same order, the same sums.
+__attribute__((target("avx2"))) void addNeighbourMomentsAvx2(const NeighbourGrid& grid, std::size_t c, const double* m,
+                                                              double* acc) {
+  std::uint32_t around[27];
+  int count = 0;
+  grid.forEachNeighbourCell(c, [&](std::uint32_t o) { around[count++] = o; });
+  __m256d a0 = _mm256_loadu_pd(acc), a1 = _mm256_loadu_pd(acc + 4);
+  __m128d a2 = _mm_loadu_pd(acc + 8);
+  for (int k = 0; k < count; ++k) {
+    const double* b = m + 10 * static_cast<std::size_t>(around[k]);
+    a0 = _mm256_add_pd(a0, _mm256_loadu_pd(b));
+    a1 = _mm256_add_pd(a1, _mm256_loadu_pd(b + 4));
+    a2 = _mm_add_pd(a2, _mm_loadu_pd(b + 8));
+  }
+  _mm256_storeu_pd(acc, a0);
+  _mm256_storeu_pd(acc + 4, a1);
+  _mm_storeu_pd(acc + 8, a2);
+  // Upper halves of the vector registers cleared before returning to SSE code.
+  _mm256_zeroupper();
+}
+#endif
+
 Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, const Eigen::Vector3f& viewpoint) {
   Normals out;
   out.n.assign(points.size(), Eigen::Vector3f::Zero());
@@ -69,6 +153,10 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
       q[3] += d.y() * d.y(), q[4] += d.y() * d.z(), q[5] += d.z() * d.z();
     }
   };
+  // n, s and q side by side: ten doubles (read as such by addNeighbourMomentsAvx2).
+  static_assert(sizeof(Moments) == 10 * sizeof(double) && offsetof(Moments, s) == sizeof(double) &&
+                    offsetof(Moments, q) == 4 * sizeof(double),
+                "moments: ten doubles");
   const std::size_t cells = grid.cells();
   const Eigen::Vector3d origin = points.front().cast<double>();
   std::vector<Moments> m(cells);
@@ -124,26 +212,36 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
     float curvature = 1.0f;
     bool ok = false;
   };
-  auto pca = [](const Moments& acc) {
-    Pca r;
-    if (acc.n < 3) return r;  // isolated: no normal (zero), curvature 1
+  // The covariance of a neighbourhood's moments and its eigenvalues, then
+  // (where needed) the normal: the eigenvector of the smallest.
+  auto eigenvalues = [](const Moments& acc, Eigen3& e) {
     const Eigen::Vector3d mean = Eigen::Vector3d(acc.s[0], acc.s[1], acc.s[2]) / acc.n;
     Eigen::Matrix3d ss;
     ss << acc.q[0], acc.q[1], acc.q[2], acc.q[1], acc.q[3], acc.q[4], acc.q[2], acc.q[4], acc.q[5];
     const Eigen::Matrix3d C = ss / acc.n - mean * mean.transpose();
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
-    es.computeDirect(C);
-    r.n = es.eigenvectors().col(0).cast<float>().normalized();
+    e.values(C);
+  };
+  auto curvatureOf = [](const Eigen3& e) {
+    const double sum = e.eivals.sum();
+    return sum > 0 ? static_cast<float>(std::max(0.0, e.eivals(0)) / sum) : 0.0f;
+  };
+  auto finish = [&](Eigen3& e) {
+    Pca r;
+    e.vector0();
+    r.n = e.eivecs.col(0).cast<float>().normalized();
     if (!r.n.allFinite()) return Pca();
-    const double sum = es.eigenvalues().sum();
-    r.curvature = sum > 0 ? static_cast<float>(std::max(0.0, es.eigenvalues()(0)) / sum) : 0.0f;
+    r.curvature = curvatureOf(e);
     r.ok = true;
     return r;
   };
+  auto pca = [&](const Moments& acc) {
+    if (acc.n < 3) return Pca();  // isolated: no normal (zero), curvature 1
+    Eigen3 e;
+    eigenvalues(acc, e);
+    return finish(e);
+  };
   // Coarse normals first: the 3 x 3 x 3 coarse cells around each coarse cell.
-  std::vector<Pca> coarse(cm.size());
-#pragma omp parallel for schedule(dynamic, 256)
-  for (long long i = 0; i < static_cast<long long>(cm.size()); ++i) {
+  auto coarseMoments = [&](std::size_t i) {
     Moments acc;
     const Eigen::Vector3i& q = ccoord[i];
     for (int dz = -1; dz <= 1; ++dz)
@@ -153,8 +251,31 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
                                               : coarse_map.find(preprocess::packCell(q.x() + dx, q.y() + dy, q.z() + dz));
           if (o != preprocess::CellMap::kNone) acc.add(cm[o]);
         }
-    coarse[i] = pca(acc);
+    return acc;
+  };
+  // A coarse neighbourhood curved beyond kRefineCurvature (by its
+  // eigenvalues) sends its cells to their fine neighbourhoods whether or not
+  // its normal exists: the normal is not worked out (unknown) and is found
+  // only for a cell whose fine neighbourhood holds too few points.
+  std::vector<Pca> coarse(cm.size());
+  std::vector<char> coarse_unknown(cm.size(), 0);
+#pragma omp parallel for schedule(dynamic, 256)
+  for (long long i = 0; i < static_cast<long long>(cm.size()); ++i) {
+    const Moments acc = coarseMoments(static_cast<std::size_t>(i));
+    if (acc.n < 3) continue;  // Pca(): no normal, curvature 1
+    Eigen3 e;
+    eigenvalues(acc, e);
+    const float curvature = curvatureOf(e);
+    if (curvature > kRefineCurvature) {
+      coarse[i].curvature = curvature;
+      coarse_unknown[i] = 1;
+    } else {
+      coarse[i] = finish(e);
+    }
   }
+#ifdef DSR_NEIGHBOUR_MOMENTS_AVX2
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+#endif
   // Fine cells take the coarse normal where it is planar (most of a room);
   // near edges, corners and thin parts the 3 x 3 x 3 fine cells around.
 #pragma omp parallel
@@ -164,8 +285,17 @@ Normals estimateNormals(const Points& points, const NeighbourGrid& grid, int k, 
       Pca r = coarse[coarse_of[c]];
       if (!r.ok || r.curvature > kRefineCurvature) {
         Moments acc;
-        grid.forEachNeighbourCell(static_cast<std::size_t>(c), [&](std::uint32_t o) { acc.add(m[o]); });
-        if (acc.n >= need) r = pca(acc);
+#ifdef DSR_NEIGHBOUR_MOMENTS_AVX2
+        if (avx2)
+          addNeighbourMomentsAvx2(grid, static_cast<std::size_t>(c), &m[0].n, &acc.n);
+        else
+#endif
+          grid.forEachNeighbourCell(static_cast<std::size_t>(c), [&](std::uint32_t o) { acc.add(m[o]); });
+        if (acc.n >= need) {
+          r = pca(acc);
+        } else if (coarse_unknown[coarse_of[c]]) {
+          r = pca(coarseMoments(coarse_of[c]));
+        }
       }
       if (!r.ok) continue;
       for (const int* it = grid.cellBegin(c); it != grid.cellEnd(c); ++it) {
@@ -450,6 +580,8 @@ constexpr int kMinRansacIterations = 20;
 // round is too small to hand to the other thread: waiting for it could cost
 // more (a thread of a loaded machine waits for its turn on a core).
 constexpr std::size_t kTaskSample = 4000, kTaskInliers = 1000;
+// A pool of this many points or more has its inliers found in two halves at once.
+constexpr std::size_t kTaskPool = 20000;
 
 // Of the n sample points (x, y, normal nx_i, ny_i), those within wd of the
 // line through (qx, qy) with normal (nx, ny) whose normal agrees (|n . n_i|
@@ -616,10 +748,40 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
           }
         }
       };
-      for (int pass = 0; pass < 3; ++pass) {
+      // The inliers of the whole pool: a large pool in two halves at once,
+      // the second as a task into lists of its own (moved out when done: the
+      // ends of lists side by side would share cache lines between the
+      // cores), appended after the first's: the lists of one pass. A task
+      // group waits for that task alone, not for the rounds' rules (tasks).
+      std::vector<int> inl_second;
+      std::vector<Eigen::Vector2d> q2_second;
+      auto allInliers = [&] {
         inl.clear();
         q2.clear();
-        inliersOf(0, pool.size(), inl, q2);
+        if (pool.size() < kTaskPool) {
+          inliersOf(0, pool.size(), inl, q2);
+          return;
+        }
+        const std::size_t mid = pool.size() / 2;
+#pragma omp taskgroup
+        {
+#pragma omp task default(shared)
+          {
+            std::vector<int> in;
+            std::vector<Eigen::Vector2d> q;
+            in.reserve(pool.size() - mid);
+            q.reserve(pool.size() - mid);
+            inliersOf(mid, pool.size(), in, q);
+            inl_second.swap(in);
+            q2_second.swap(q);
+          }
+          inliersOf(0, mid, inl, q2);
+        }
+        inl.insert(inl.end(), inl_second.begin(), inl_second.end());
+        q2.insert(q2.end(), q2_second.begin(), q2_second.end());
+      };
+      for (int pass = 0; pass < 3; ++pass) {
+        allInliers();
         if (q2.size() < 3 || pass == 2) break;
         Eigen::Vector2d c, dir;
         fitLine(q2, c, dir);

@@ -221,7 +221,7 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     return !((vsd + lam * r - dc).norm() > reach + Lmax);
   };
   // The rays in kRayParts parts of the points (tasks), joined in order.
-  constexpr int kRayParts = 3;
+  constexpr int kRayParts = 5;
   std::vector<std::vector<Ray>> ray_parts(kRayParts);
   // Each part (and the points' pass) fills lists of its own task, moved out
   // when done: the ends of lists side by side, written at every ray, would
