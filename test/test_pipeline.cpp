@@ -987,21 +987,33 @@ TEST(Stations, ADoorwayRunTogetherWithItsLeafsShadowIntoARunJustTooWideIsFound) 
 
 TEST(Stations, TwoDoorsOfOneStationAreNeverJoinedByAnotherStationsReport) {
   using dsr::stations::groupReports;
+  auto apart = [](std::size_t i, std::size_t j) { return static_cast<double>(i > j ? i - j : j - i); };
   // Reports 0 and 1: two doors side by side, seen from station 0. Report 2,
   // from station 1, a doorway fitted wrongly across both (it overlaps each):
-  // it joins the first, and the two doors stay two.
+  // it joins the one it lies nearer, and the two doors stay two.
   auto overlapsBoth = [](std::size_t i, std::size_t j) { return (i == 2) != (j == 2); };
-  const auto g = groupReports({0, 0, 1}, overlapsBoth);
+  auto nearer1 = [](std::size_t i, std::size_t j) { return (i == 1 || j == 1) ? 0.2 : 0.3; };
+  auto g = groupReports({0, 0, 1}, overlapsBoth, nearer1);
+  ASSERT_EQ(g.size(), 2u);
+  EXPECT_EQ(g[0], (std::vector<std::size_t>{0}));
+  EXPECT_EQ(g[1], (std::vector<std::size_t>{1, 2}));
+  auto nearer0 = [](std::size_t i, std::size_t j) { return (i == 0 || j == 0) ? 0.2 : 0.3; };
+  g = groupReports({0, 0, 1}, overlapsBoth, nearer0);
   ASSERT_EQ(g.size(), 2u);
   EXPECT_EQ(g[0], (std::vector<std::size_t>{0, 2}));
   EXPECT_EQ(g[1], (std::vector<std::size_t>{1}));
   // Reports of three stations in a chain (0 the same as 1, 1 as 2) are one
   // door: the groups are the connected parts of `same`.
   auto chain = [](std::size_t i, std::size_t j) { return (i > j ? i - j : j - i) == 1; };
-  EXPECT_EQ(groupReports({0, 1, 2}, chain).size(), 1u);
-  // ... but not when the chain's ends are two reports of one station.
-  EXPECT_EQ(groupReports({0, 1, 0}, chain).size(), 2u);
-  EXPECT_TRUE(groupReports({}, chain).empty());
+  EXPECT_EQ(groupReports({0, 1, 2}, chain, apart).size(), 1u);
+  // ... but not when the chain's ends are two reports of one station that
+  // are not the same door.
+  EXPECT_EQ(groupReports({0, 1, 0}, chain, apart).size(), 2u);
+  // Two reports of one station that are the same door (a station's
+  // duplicate) are one door, and another station's report joins them.
+  auto all = [](std::size_t, std::size_t) { return true; };
+  EXPECT_EQ(groupReports({0, 0, 1}, all, apart).size(), 1u);
+  EXPECT_TRUE(groupReports({}, chain, apart).empty());
 }
 
 TEST(Stations, ReportsOfOneDoorFromBothFacesOfItsWallAreOneDoor) {

@@ -225,10 +225,13 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
     return std::min(a1, b1) - std::max(a0, b0) > kSameDoorOverlap;
   };
   // A door's reports: the connected parts of `same`, never joining two
-  // doors of one station (groupReports).
+  // doors of one station; a report the same as two of them joins the one
+  // whose doorway's centre is nearer (groupReports).
   std::vector<std::vector<DoorResult>> groups;
   for (const std::vector<std::size_t>& g :
-       stations::groupReports(report_station, [&](std::size_t i, std::size_t j) { return same(reports[i], reports[j]); })) {
+       stations::groupReports(
+           report_station, [&](std::size_t i, std::size_t j) { return same(reports[i], reports[j]); },
+           [&](std::size_t i, std::size_t j) { return (reports[i].opening_center - reports[j].opening_center).norm(); })) {
     groups.emplace_back();
     for (std::size_t i : g) groups.back().push_back(reports[i]);
   }
@@ -303,7 +306,8 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
 namespace stations {
 
 std::vector<std::vector<std::size_t>> groupReports(const std::vector<int>& station_of,
-                                                   const std::function<bool(std::size_t, std::size_t)>& same) {
+                                                   const std::function<bool(std::size_t, std::size_t)>& same,
+                                                   const std::function<double(std::size_t, std::size_t)>& distance) {
   const std::size_t n = station_of.size();
   std::vector<std::size_t> part(n);
   std::vector<std::vector<int>> held(n);  // the stations of a part's reports, at its root, sorted
@@ -312,20 +316,37 @@ std::vector<std::vector<std::size_t>> groupReports(const std::vector<int>& stati
     while (part[i] != i) i = part[i] = part[part[i]];
     return i;
   };
+  auto join = [&](std::size_t a, std::size_t b) {
+    const std::size_t to = std::min(a, b), from = std::max(a, b);
+    part[from] = to;
+    std::vector<int> merged;
+    std::set_union(held[a].begin(), held[a].end(), held[b].begin(), held[b].end(), std::back_inserter(merged));
+    held[to].swap(merged);
+    held[from].clear();
+  };
+  std::vector<std::pair<std::size_t, std::size_t>> across;  // same door, different stations
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t j = i + 1; j < n; ++j) {
+      if (!same(i, j)) continue;
+      if (station_of[i] != station_of[j]) {
+        across.push_back({i, j});
+        continue;
+      }
       const std::size_t a = root(i), b = root(j);
-      if (a == b || !same(i, j)) continue;
-      std::vector<int> both;
-      std::set_intersection(held[a].begin(), held[a].end(), held[b].begin(), held[b].end(), std::back_inserter(both));
-      if (!both.empty()) continue;
-      const std::size_t to = std::min(a, b), from = std::max(a, b);
-      part[from] = to;
-      std::vector<int> merged;
-      std::merge(held[a].begin(), held[a].end(), held[b].begin(), held[b].end(), std::back_inserter(merged));
-      held[to].swap(merged);
-      held[from].clear();
+      if (a != b) join(a, b);
     }
+  std::vector<double> dist(across.size());
+  for (std::size_t k = 0; k < across.size(); ++k) dist[k] = distance(across[k].first, across[k].second);
+  std::vector<std::size_t> order(across.size());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return dist[x] < dist[y]; });
+  for (std::size_t k : order) {
+    const std::size_t a = root(across[k].first), b = root(across[k].second);
+    if (a == b) continue;
+    std::vector<int> both;
+    std::set_intersection(held[a].begin(), held[a].end(), held[b].begin(), held[b].end(), std::back_inserter(both));
+    if (both.empty()) join(a, b);
+  }
   std::vector<std::vector<std::size_t>> groups;
   std::vector<int> group_of(n, -1);
   for (std::size_t i = 0; i < n; ++i) {

@@ -655,7 +655,11 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
 
   // Sub-runs of columns [lo, hi] seen through (through or recess cells at
   // least twice the shadowed ones over the body), bridging single columns
-  // of neither, with shadow (the reverse) on exactly one side, as [s0, s1).
+  // of neither, that lie between one end of the run (where the wall's face
+  // resumes: a jamb; up to two columns of neither beyond them) and a shadow
+  // (the reverse) at least kMinShadowCols wide: as column ranges
+  // [first, last + 1).
+  constexpr int kMinShadowCols = 3;
   auto throughBesideShadow = [&](int lo, int hi) {
     auto kindOf = [&](int k) {  // 1 seen through, 2 shadow, 0 mixed, -1 nothing seen
       int tr = 0, sh = 0;
@@ -671,7 +675,12 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     const int n = hi - lo + 1;
     std::vector<int> kind(n);
     for (int k = 0; k < n; ++k) kind[k] = kindOf(lo + k);
-    std::vector<std::pair<double, double>> parts;
+    auto shadowFrom = [&](int k, int step) {  // kMinShadowCols shadow columns from k on, in direction step
+      for (int j = 0; j < kMinShadowCols; ++j, k += step)
+        if (k < 0 || k >= n || kind[k] != 2) return false;
+      return true;
+    };
+    std::vector<std::pair<int, int>> parts;
     for (int a = 0; a < n;) {
       if (kind[a] != 1) {
         ++a;
@@ -679,8 +688,15 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       }
       int b = a;
       while (b + 1 < n && kind[b + 1] != 2 && (kind[b + 1] == 1 || (b + 2 < n && kind[b + 2] == 1))) ++b;
-      const bool shadow_before = a > 0 && kind[a - 1] == 2, shadow_after = b + 1 < n && kind[b + 1] == 2;
-      if (shadow_before != shadow_after) parts.push_back({colS(lo + a), colS(lo + b + 1)});
+      // At an end of the run: at most two columns beyond, neither seen
+      // through nor shadow (the jamb's edge, seen in part).
+      auto endWithin = [&](int from, int to) {
+        for (int k = from; k != to; k += from < to ? 1 : -1)
+          if (kind[k] > 0) return false;
+        return std::abs(to - from) <= 2;
+      };
+      if ((endWithin(a - 1, -1) && shadowFrom(b + 1, 1)) || (endWithin(b + 1, n) && shadowFrom(a - 1, -1)))
+        parts.push_back({lo + a, lo + b + 1});
       a = b + 1;
     }
     return parts;
@@ -746,11 +762,11 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     // decides (and moves the hinge, as the shadow's edge is not the jamb).
     auto addPartsSeenThrough = [&]() {
       for (const auto& [a, b] : throughBesideShadow(lo, hi))
-        addCandidate(a == colS(lo) ? s0 : a, b == colS(hi + 1) ? s1 : b, false);
+        addCandidate(a == lo ? s0 : colS(a), b == hi + 1 ? s1 : colS(b), false);
     };
     // A run a little wider than a door is itself a candidate, which would
     // take the place of a part overlapping it: the parts go first (1027 at
-    // 50k rays: a doorway and its leaf's shadow 1.50 m wide, the leaf fitted
+    // 33k rays: a doorway and its leaf's shadow 1.50 m wide, the leaf fitted
     // 28 deg off across both and the doorway refused as too wide).
     if (d_view > 0.1 && s1 - s0 > p.door_max_width && s1 - s0 <= p.door_max_width + 0.1) addPartsSeenThrough();
     addCandidate(s0, s1, false);

@@ -65,8 +65,10 @@ struct Doorway {
 // wall. Where the face is too noisy for either (a depth camera at range),
 // runs of columns whose body lies well behind the same columns' wall above
 // a door's head, level with it again on both sides, form doorways too
-// (set_back). Candidates are door_min_width..door_max_width wide; a shadow
-// wider than any door gives one from its end nearer the sensor (shadow_end).
+// (set_back). Candidates are door_min_width - 0.1 .. door_max_width + 0.1
+// wide; a shadow wider than any door gives one from its end nearer the
+// sensor (shadow_end), and a run too wide for a door the part of it seen
+// through between one of its ends and a shadow (a leaf's, beyond its hinge).
 // no_return_is_free: the cloud is an organized camera frame, where a body
 // cell of a doorway without any return means nothing was there in range
 // (counted as seen through). With the frame's view (view), such a cell
