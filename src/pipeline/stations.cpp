@@ -227,23 +227,18 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
   // A door's reports: the connected parts of `same`, never joining two
   // doors of one station; a report the same as two of them joins the one
   // whose doorway's centre is nearer (groupReports).
-  std::vector<std::vector<DoorResult>> groups;
-  for (const std::vector<std::size_t>& g :
-       stations::groupReports(
-           report_station, [&](std::size_t i, std::size_t j) { return same(reports[i], reports[j]); },
-           [&](std::size_t i, std::size_t j) { return (reports[i].opening_center - reports[j].opening_center).norm(); })) {
-    groups.emplace_back();
-    for (std::size_t i : g) groups.back().push_back(reports[i]);
-  }
+  const std::vector<std::vector<std::size_t>> groups = stations::groupReports(
+      report_station, [&](std::size_t i, std::size_t j) { return same(reports[i], reports[j]); },
+      [&](std::size_t i, std::size_t j) { return (reports[i].opening_center - reports[j].opening_center).norm(); });
   // Of each door's reports the best (better()). (A station's free-space
   // bound is not a hard limit for a leaf measured from another: it assumes
   // that station's jambs and hinge. Replacing a measured leaf more than 5 deg
   // below another station's bound by the bound lost four correct doors in
   // the beyond and stations3 sweeps for one it mended.)
-  for (const std::vector<DoorResult>& g : groups) {
-    const DoorResult* best = &g.front();
-    for (const DoorResult& d : g)
-      if (better(d, *best)) best = &d;
+  for (const std::vector<std::size_t>& g : groups) {
+    const DoorResult* best = &reports[g.front()];
+    for (std::size_t i : g)
+      if (better(reports[i], *best)) best = &reports[i];
     res.doors.push_back(*best);
   }
   res.doors.erase(std::remove_if(res.doors.begin(), res.doors.end(),

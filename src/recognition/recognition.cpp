@@ -653,6 +653,10 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     }
   }
 
+  // A cell without face: seen through it (a return behind the plane, far or
+  // near), or only shadowed (something in front, nothing behind).
+  auto seenThrough = [](const Cell& g) { return g.through != 0 || g.recess != 0; };
+  auto shadowOnly = [](const Cell& g) { return g.front != 0 && g.through == 0 && g.recess == 0; };
   // Sub-runs of columns [lo, hi] seen through (through or recess cells at
   // least twice the shadowed ones over the body), bridging single columns
   // of neither, that lie between one end of the run (where the wall's face
@@ -666,8 +670,8 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       for (int r = body0; r < body1; ++r) {
         const Cell& g = grid[static_cast<std::size_t>(r) * cols + k];
         if (g.face) continue;
-        tr += g.through || g.recess;
-        sh += g.front && !g.through && !g.recess;
+        tr += seenThrough(g);
+        sh += shadowOnly(g);
       }
       if (tr + sh == 0) return -1;
       return tr >= 2 * sh ? 1 : sh >= 2 * tr ? 2 : 0;
@@ -781,8 +785,8 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
         for (int r = body0; r < body1; ++r) {
           const Cell& g = grid[static_cast<std::size_t>(r) * cols + k];
           if (g.face) continue;
-          ex += g.through || g.front || g.recess;
-          fr += g.front && !g.through && !g.recess;
+          ex += seenThrough(g) || g.front;
+          fr += shadowOnly(g);
         }
       const double vs = wall.along(viewpoint);
       if (ex > 0 && fr >= kShadowRun * ex && (vs < s0 || vs > s1)) {

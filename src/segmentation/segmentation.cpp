@@ -1,6 +1,7 @@
 #include "door_state_recognition/segmentation/segmentation.hpp"
 
 #include "door_state_recognition/preprocess/cell_map.hpp"
+#include "door_state_recognition/util/first_error.hpp"
 #include "door_state_recognition/util/radix_sort.hpp"
 
 #include <Eigen/Eigenvalues>
@@ -763,10 +764,11 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
           return;
         }
         const std::size_t mid = pool.size() / 2;
+        util::FirstError failed;  // an exception must not leave the task
 #pragma omp taskgroup
         {
 #pragma omp task default(shared)
-          {
+          failed.run([&] {
             std::vector<int> in;
             std::vector<Eigen::Vector2d> q;
             in.reserve(pool.size() - mid);
@@ -774,9 +776,10 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
             inliersOf(mid, pool.size(), in, q);
             inl_second.swap(in);
             q2_second.swap(q);
-          }
-          inliersOf(0, mid, inl, q2);
+          });
+          failed.run([&] { inliersOf(0, mid, inl, q2); });
         }
+        failed.rethrow();
         inl.insert(inl.end(), inl_second.begin(), inl_second.end());
         q2.insert(q2.end(), q2_second.begin(), q2_second.end());
       };
