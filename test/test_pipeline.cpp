@@ -1002,6 +1002,37 @@ TEST(Stations, ADoorwayRunTogetherWithItsLeafsShadowIntoARunJustTooWideIsFound) 
   EXPECT_TRUE(e.unmatched_report.empty());
 }
 
+TEST(Stations, ALeafInASparseScanIsJudgedAgainstHowDenselyItsWallIsSampled) {
+  // Room 5017 at 25k rays a station (100k in all, the station inside and one
+  // beyond each of its three doors). From inside, door 1 (33 deg, swung
+  // towards the station) hides its doorway and trim; its leaf is fitted
+  // within a degree, but holds points in 45 % of its 5 x 10 cm cells, under
+  // the 60 % a leaf hiding its own doorway needs. The wall's own face
+  // beside the doorway, 2.1-2.4 m off, holds points in a third to a half of
+  // its cells at this density: the leaf is as well seen as anything there.
+  // The coverage thresholds scale with that share (over 0.9, by half at
+  // most): the leaf is taken (before: only a report from a station beyond,
+  // more than 0.5 m off the door, which scored as a false door).
+  const Pipeline pipe{Parameters()};
+  const Survey sv = survey(5017, 1, 25000, true);
+  ASSERT_EQ(sv.truth["doors"].size(), 3u);
+  const PipelineResult inside = pipe.run(sv.scans[0], false, sv.origins[0]);
+  const eval::EvalResult i = sv.score(inside);
+  SCOPED_TRACE(::testing::Message() << "seed=5017 inside:" << describe(inside) << trace(Scored{i, inside, {}}));
+  const eval::DoorMatch* m = nullptr;
+  for (const auto& x : i.matches)
+    if (x.truth_index == 1) m = &x;
+  ASSERT_NE(m, nullptr) << "door 1 (33 deg) not found from inside";
+  EXPECT_FALSE(m->angle_is_lower_bound);
+  EXPECT_LT(m->angle_error_deg, 3.0);
+  EXPECT_LT(m->hinge_error_m, 0.1);
+  EXPECT_TRUE(m->state_correct);
+  const eval::EvalResult e = sv.score(pipe.runStations(sv.stations(), false));
+  EXPECT_EQ(e.matched, 3);
+  EXPECT_EQ(e.reported_doors, 3);
+  EXPECT_EQ(e.state_correct, 3);
+}
+
 TEST(Stations, TwoDoorsOfOneStationAreNeverJoinedByAnotherStationsReport) {
   using dsr::stations::groupReports;
   auto apart = [](std::size_t i, std::size_t j) { return static_cast<double>(i > j ? i - j : j - i); };

@@ -49,6 +49,10 @@ constexpr int kOutrightAngles = 6;
 // A leaf whose best hypothesis at the jambs holds points in fewer of its
 // cells is sought with hinges outwards of them too.
 constexpr double kRetryBelowCoverage = 0.5;
+// A wall's face seen this densely (share of its 5 x 10 cm cells holding
+// points) or more is sampled densely enough for the coverage thresholds as
+// they stand (LeafFit::sampling).
+constexpr double kDenseWallCover = 0.9;
 
 // An upper bound of asin(x), x in [0, 1], within 2% for x <= 0.5: asin's
 // series x + x^3/6 + 3x^5/40 + ... has no coefficient above 1/6 after the
@@ -177,6 +181,11 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
   // run at once when both are needed (one is not when the band's points
   // alone can end the search, below).
   std::vector<Local> pts, band;
+  // The wall's face beside the doorway, 0.15-0.6 m beyond each jamb: its
+  // cells holding points (see LeafFit::sampling). Not in a camera frame.
+  constexpr double kSideFrom = 0.15, kSideTo = 0.6;
+  const int side_cols = static_cast<int>(std::lround((kSideTo - kSideFrom) / abin));
+  std::vector<char> side_cells(view ? 0 : static_cast<std::size_t>(2 * side_cols * nz), 0);
   auto gatherPoints = [&] {
     // Lists of this task's own, moved out when done (see gatherRayPart).
     std::vector<Local> near, in_band;
@@ -184,6 +193,15 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       const auto& q = points[i];
       if (q.z() < z0 || q.z() >= z1) continue;
       const double s = wall.along(q), d = wall.signedDistance(q);
+      if (!side_cells.empty() && std::abs(d) <= p.face_tolerance) {
+        const double out0 = door.s0 - s, out1 = s - door.s1;  // beyond each jamb
+        const int side = out0 >= kSideFrom && out0 < kSideTo ? 0 : out1 >= kSideFrom && out1 < kSideTo ? 1 : -1;
+        if (side >= 0) {
+          const int col = std::min(side_cols - 1, static_cast<int>(((side == 0 ? out0 : out1) - kSideFrom) / abin));
+          const int zb = std::min(nz - 1, static_cast<int>((q.z() - z0) / zbin));
+          side_cells[(static_cast<std::size_t>(side) * side_cols + col) * nz + zb] = 1;
+        }
+      }
       if (!nearJamb(s, d)) continue;
       const int zb = std::min(nz - 1, static_cast<int>((q.z() - z0) / zbin));
       const bool inside = s > door.s0 + 0.03 && s < door.s1 - 0.03;
@@ -293,6 +311,20 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     }
   }
   const double band_cov = std::min(1.0, band_distinct / expected);
+  if (!side_cells.empty()) {
+    double best_side = -1;
+    for (int side = 0; side < 2; ++side) {
+      int cols_on_wall = 0, held = 0;
+      for (int col = 0; col < side_cols; ++col) {
+        const double out = kSideFrom + (col + 0.5) * abin, sc = side == 0 ? door.s0 - out : door.s1 + out;
+        if (sc < wall.s_min || sc > wall.s_max) continue;
+        ++cols_on_wall;
+        for (int zb = 0; zb < nz; ++zb) held += side_cells[(static_cast<std::size_t>(side) * side_cols + col) * nz + zb];
+      }
+      if (cols_on_wall >= side_cols / 2) best_side = std::max(best_side, static_cast<double>(held) / (cols_on_wall * nz));
+    }
+    if (best_side >= 0) fit.sampling = std::clamp(best_side / kDenseWallCover, 0.5, 1.0);
+  }
   fit.candidate_points = static_cast<int>(pts.size());
   if (closed_band_only_above > 0 && band_cov <= closed_band_only_above) {
     fit.searched = false;
@@ -942,8 +974,8 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
     }
     const bool cut_by_view = in_view >= 0.25 && in_view < 0.9 && gen_contra <= 0.05 &&
                              cov >= (sure_doorway ? 0.5 : 1.0) * p.min_leaf_coverage * in_view;
-    if (cov >= p.min_leaf_coverage || (sure_doorway && cov >= 0.5 * p.min_leaf_coverage && gen_contra <= 0.05) ||
-        cut_by_view) {
+    const double min_cov = p.min_leaf_coverage * fit.sampling;
+    if (cov >= min_cov || (sure_doorway && cov >= 0.5 * min_cov && gen_contra <= 0.05) || cut_by_view) {
       fit.found = true;
       fit.coverage = cov;
       fit.angle_deg = angle;

@@ -226,7 +226,7 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       // A leaf within kBoxSideDeg of square to the wall is not taken on this
       // evidence: the side of a cupboard against the wall looks just like it.
       const bool own_leaf_hides = !leaf.closed_in_band && leaf.toward_viewer && d.front >= kOwnLeafFront &&
-                                  leaf.coverage >= kOwnLeafCoverage && leaf.occluders_explained >= kOwnLeafExplained &&
+                                  leaf.coverage >= kOwnLeafCoverage * leaf.sampling && leaf.occluders_explained >= kOwnLeafExplained &&
                                   std::abs(leaf.angle_deg - 90) >= kBoxSideDeg;
       // A panel set back from the wall around it must lie off the wall's
       // plane over a good part of its body too.

@@ -47,6 +47,14 @@ struct LeafFit {
   // it from the sensor (in front of the wall, sight line meeting the wall
   // inside the doorway) which lie on the leaf (0 when none or not computed).
   double occluders_explained = 0;
+  // How densely the scan samples surfaces at the doorway: the share of the
+  // 5 x 10 cm cells of the wall's face beside it (0.15-0.6 m beyond either
+  // jamb, the better side) holding points, over kDenseWallCover, clamped to
+  // [0.5, 1]. A leaf's coverage thresholds are scaled by it: a sparse scan
+  // (a scanner's rays 5-8 cm apart on a wall 2-3 m off) leaves a leaf's
+  // cells as empty as the wall's. 1 in a camera frame (dense) or where no
+  // wall beside the doorway was seen.
+  double sampling = 1.0;
   // No leaf found in a doorway beyond doubt: the least opening angle at
   // which a leaf of the doorway's width blocks no ray that went through
   // (hinge_at_s0 and toward_viewer say where); a lower bound of the opening
