@@ -1,13 +1,16 @@
 #!/usr/bin/env python3
-"""How much of each missed door's leaf did the laser scan see?
+"""How much of each missed door's leaf did the scan see?
 
-Reads a folder written by `eval_sweep.py --sensor tls --out DIR` (PREFIX.pcd,
-PREFIX.json truth, PREFIX.report.json per scene), scores each scene with
+Reads a folder written by `eval_sweep.py --out DIR` (PREFIX.pcd, PREFIX.json
+truth, PREFIX.report.json per scene; a laser scan, or an RGB-D frame in its
+camera frame, heights taken along the truth's "up"), scores each scene with
 door_state_eval, and for every truth door in view that no reported door
 matched prints the share of its leaf's 5 cm x 10 cm cells (over the body of
 the leaf, 0.25-1.75 m above the floor, as the leaf search uses) that hold at
-least one point of the scan within 6 cm of the leaf's true plane. A share
-near 0 means the scan position did not see the leaf at all.
+least one point of the scan within 6 cm of the leaf's true plane, and the
+share of them more than 10 cm from the hinge (what a jamb or trim at the
+hinge cannot put there). A share near 0 means the scan position did not see
+the leaf at all.
 
   scripts/leaf_visibility.py DIR [--bin BUILD_BIN]
 """
@@ -32,17 +35,24 @@ def read_pcd_xyz(path):
     return a["x"].astype(float), a["y"].astype(float), a["z"].astype(float)
 
 
-def leaf_share(x, y, z, door, floor):
-    corners = np.array(door["leaf_corners"])
-    h, l = corners[0][:2], corners[1][:2]
+def leaf_share(x, y, z, door, floor, up):
+    """(share of the leaf's cells seen, share of them more than 10 cm from the hinge)"""
+    up = np.asarray(up, dtype=float) / np.linalg.norm(up)
+    corners = np.array(door["leaf_corners"], dtype=float)
+    # The leaf's bottom edge, hinge to latch, in the plane across "up".
+    h = corners[0] - corners[0].dot(up) * up
+    l = corners[1] - corners[1].dot(up) * up
     length = float(np.linalg.norm(l - h))
     e = (l - h) / length
-    n = np.array([-e[1], e[0]])
-    px, py = x - h[0], y - h[1]
-    along, off = px * e[0] + py * e[1], px * n[0] + py * n[1]
-    sel = (np.abs(off) < 0.06) & (along > 0) & (along < length) & (z > floor + 0.25) & (z < floor + 1.75)
-    cells = set(zip((along[sel] / 0.05).astype(int), ((z[sel] - floor - 0.25) / 0.1).astype(int)))
-    return len(cells) / (math.ceil(length / 0.05) * 15)
+    n = np.cross(up, e)
+    p = np.stack([x, y, z], 1)
+    height = p @ up - floor
+    along, off = (p - h) @ e, (p - h) @ n
+    sel = (np.abs(off) < 0.06) & (along > 0) & (along < length) & (height > 0.25) & (height < 1.75)
+    cells = set(zip((along[sel] / 0.05).astype(int), ((height[sel] - 0.25) / 0.1).astype(int)))
+    total = math.ceil(length / 0.05) * 15
+    beyond = sum(1 for a, _ in cells if a >= 2)  # cells starting 10 cm or more from the hinge
+    return len(cells) / total, beyond / total
 
 
 def main():
@@ -64,10 +74,10 @@ def main():
         x, y, z = read_pcd_xyz(f"{prefix}.pcd")
         for i in missed:
             d = truth["doors"][i]
-            share = leaf_share(x, y, z, d, truth["floor"])
+            share, beyond = leaf_share(x, y, z, d, truth["floor"], truth.get("up", [0, 0, 1]))
             shares.append(share)
             print(f"{Path(prefix).name} door {i}: {d['state']} {d['opening_angle_deg']:.0f} deg "
-                  f"{d['swing']}: leaf cells seen {share:.2f}")
+                  f"{d['swing']}: leaf cells seen {share:.2f} ({beyond:.2f} beyond 10 cm of the hinge)")
     if shares:
         print(f"missed doors: {len(shares)}; leaf cells seen <= 0.12: {sum(s <= 0.12 for s in shares)}", file=sys.stderr)
 
