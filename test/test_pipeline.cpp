@@ -1002,6 +1002,37 @@ TEST(Stations, ADoorwayRunTogetherWithItsLeafsShadowIntoARunJustTooWideIsFound) 
   EXPECT_TRUE(e.unmatched_report.empty());
 }
 
+TEST(Stations, ADoorwayAtTheEndOfAWallSeenIsCutAtItsLeafsShadowInASparseScan) {
+  // Room 4023 at 33k rays a station (100k in all: the station inside and
+  // one beyond each of its two doors). From inside, door 0 stands open 121
+  // deg towards the station at the end of the wall it sees: the leaf
+  // shadows the wall's last 0.3 m beyond its hinge, and the run of open
+  // columns ran from the end of the wall grid through the doorway, 1.14 m
+  // for 0.76, wide enough for a door, so nothing cut it. The scan's
+  // vertical lines fall every second or third 4 cm column there, so the part
+  // seen through was also broken by pairs of columns no ray reached. A run
+  // that reaches the grid's end now gives its part seen through beside a
+  // shadow first, with such gaps bridged: the leaf is measured from inside.
+  const Pipeline pipe{Parameters()};
+  const Survey sv = survey(4023, 1, 33333, true);
+  ASSERT_EQ(sv.truth["doors"].size(), 2u);
+  const PipelineResult inside = pipe.run(sv.scans[0], false, sv.origins[0]);
+  const eval::EvalResult i = sv.score(inside);
+  SCOPED_TRACE(::testing::Message() << "seed=4023 inside:" << describe(inside) << trace(Scored{i, inside, {}}));
+  const eval::DoorMatch* m = nullptr;
+  for (const auto& x : i.matches)
+    if (x.truth_index == 0) m = &x;
+  ASSERT_NE(m, nullptr) << "door 0 (121 deg) not found from inside";
+  EXPECT_FALSE(m->angle_is_lower_bound);
+  EXPECT_LT(m->angle_error_deg, 5.0);
+  EXPECT_LT(m->hinge_error_m, 0.1);
+  EXPECT_TRUE(m->state_correct);
+  EXPECT_TRUE(i.unmatched_report.empty());
+  const eval::EvalResult e = sv.score(pipe.runStations(sv.stations(), false));
+  EXPECT_EQ(e.matched, 2);
+  EXPECT_EQ(e.reported_doors, 2);
+}
+
 TEST(Stations, ALeafInASparseScanIsJudgedAgainstHowDenselyItsWallIsSampled) {
   // Room 5017 at 25k rays a station (100k in all, the station inside and one
   // beyond each of its three doors). From inside, door 1 (33 deg, swung
