@@ -274,10 +274,10 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   constexpr int kFine = 5;
   const int fine0 = body1 * kFine, fine_n = (rows - body1) * kFine;
   std::vector<std::pair<int, int>> head_fine(static_cast<std::size_t>(std::max(0, fine_n)) * cols, {0, 0});  // face, out
-  // The face points' offsets summed in the same fine rows: a depth camera's
-  // trim stands out of the wall by less than its noise point by point, but
-  // clearly in the mean (below).
-  std::vector<double> head_fine_d(head_fine.size(), 0.0);
+  // The face points' offsets summed in the same fine rows, in a camera
+  // frame only: a depth camera's trim stands out of the wall by less than
+  // its noise point by point, but clearly in the mean (rule (5) below).
+  std::vector<double> head_fine_d(view ? head_fine.size() : 0, 0.0);
   // The wall's own noise sets how thick its face is: laser scans are
   // millimetre-sharp, depth-camera returns spread with range. The tolerance
   // is local: 2.5 sigma of the wall's inliers within half a metre along it.
@@ -384,7 +384,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
             auto& h = hf[k];
             ++h.first;
             h.second += d > p.casing_min_offset;
-            hd[k] += d;
+            if (hd) hd[k] += d;
           }
           if (pt.z() > floor_z + 0.3 && pt.z() < floor_z + 1.9) {
             const int col = std::min(sub - 1, static_cast<int>((s - s_lo) / (cell / 2)));
@@ -441,18 +441,19 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   } second;
   bothHalves(half_at < points.size(), [&](int h) {
     if (h == 0) {
-      scan(0, half_at, grid.data(), front_diff.data(), head_fine.data(), head_fine_d.data(), face_d_out.data(), face_d_n.data(), face_along, behind_face,
+      scan(0, half_at, grid.data(), front_diff.data(), head_fine.data(), head_fine_d.empty() ? nullptr : head_fine_d.data(), face_d_out.data(), face_d_n.data(), face_along, behind_face,
            [&](int col, double d) { face_d_sum[col] += d; });
       return;
     }
     second.grid.resize(grid.size());
     second.front_diff.assign(front_diff.size(), 0);
     second.head_fine.assign(head_fine.size(), {0, 0});
-    second.head_fine_d.assign(head_fine.size(), 0.0);
+    second.head_fine_d.assign(head_fine_d.size(), 0.0);
     second.face_d_out.assign(sub, 0);
     second.face_d_n.assign(sub, 0);
     std::vector<std::pair<int, double>> face_d;  // this task's own, as above
-    scan(half_at, points.size(), second.grid.data(), second.front_diff.data(), second.head_fine.data(), second.head_fine_d.data(),
+    scan(half_at, points.size(), second.grid.data(), second.front_diff.data(), second.head_fine.data(),
+         second.head_fine_d.empty() ? nullptr : second.head_fine_d.data(),
          second.face_d_out.data(), second.face_d_n.data(), second.face_along, second.behind_face,
          [&](int col, double d) { face_d.push_back({col, d}); });
     second.face_d.swap(face_d);
@@ -464,8 +465,10 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     }
     for (std::size_t k = 0; k < front_diff.size(); ++k) front_diff[k] += second.front_diff[k];
     for (std::size_t k = 0; k < head_fine.size(); ++k)
-      head_fine[k].first += second.head_fine[k].first, head_fine[k].second += second.head_fine[k].second,
-      head_fine_d[k] += second.head_fine_d[k];
+      head_fine[k].first += second.head_fine[k].first, head_fine[k].second += second.head_fine[k].second;
+    // Summed per half, then added: a split run rounds these sums otherwise
+    // than one pass would (deterministically; only rule (5) reads them).
+    for (std::size_t k = 0; k < head_fine_d.size(); ++k) head_fine_d[k] += second.head_fine_d[k];
     for (int k = 0; k < sub; ++k) face_d_out[k] += second.face_d_out[k], face_d_n[k] += second.face_d_n[k];
     for (const auto& cd : second.face_d) face_d_sum[cd.first] += cd.second;
     face_along.insert(face_along.end(), second.face_along.begin(), second.face_along.end());
@@ -671,12 +674,14 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   auto shadowOnly = [](const Cell& g) { return g.front != 0 && g.through == 0 && g.recess == 0; };
   // Sub-runs of columns [lo, hi] seen through (through or recess cells at
   // least twice the shadowed ones over the body), bridging single columns
-  // of neither, that lie between one end of the run (where the wall's face
-  // resumes: a jamb; up to two columns of neither beyond them) and a shadow
-  // (the reverse) at least kMinShadowCols wide: as column ranges
-  // [first, last + 1).
+  // of neither and pairs of columns with no evidence at all, that lie
+  // between one end of the run (where the wall's face resumes: a jamb; up
+  // to two columns of neither beyond them) and a shadow (the reverse) at
+  // least kMinShadowCols wide: as column ranges [first, last + 1).
+  // shadow_side -1: only parts with the shadow towards lo (the jamb at hi),
+  // +1: towards hi, 0: either.
   constexpr int kMinShadowCols = 3;
-  auto throughBesideShadow = [&](int lo, int hi) {
+  auto throughBesideShadow = [&](int lo, int hi, int shadow_side) {
     auto kindOf = [&](int k) {  // 1 seen through, 2 shadow, 0 mixed, -1 nothing seen
       int tr = 0, sh = 0;
       for (int r = body0; r < body1; ++r) {
@@ -692,9 +697,9 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     std::vector<int> kind(n);
     for (int k = 0; k < n; ++k) kind[k] = kindOf(lo + k);
     // kMinShadowCols shadow columns from k on, in direction step; columns
-    // no ray reached at all (-1: a sparse scan's gaps between its vertical
-    // scan lines, 10 cm apart at 25k rays 3 m off) are passed over, up to
-    // two at a time.
+    // with no evidence at all (-1: in a laser scan, the gaps between a
+    // sparse scan's vertical scan lines, every second or third 4 cm column
+    // at 33k rays 3 m off) are passed over, up to two at a time.
     auto shadowFrom = [&](int k, int step) {
       int found = 0, gap = 0;
       for (; k >= 0 && k < n && found < kMinShadowCols; k += step) {
@@ -723,7 +728,8 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
           if (kind[k] > 0) return false;
         return std::abs(to - from) <= 2;
       };
-      if ((endWithin(a - 1, -1) && shadowFrom(b + 1, 1)) || (endWithin(b + 1, n) && shadowFrom(a - 1, -1)))
+      if ((shadow_side >= 0 && endWithin(a - 1, -1) && shadowFrom(b + 1, 1)) ||
+          (shadow_side <= 0 && endWithin(b + 1, n) && shadowFrom(a - 1, -1)))
         parts.push_back({lo + a, lo + b + 1});
       a = b + 1;
     }
@@ -788,21 +794,23 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     // (the station beyond room 1001's door at 50k rays). The part seen
     // through, beside the shadow, is a doorway candidate; the leaf search
     // decides (and moves the hinge, as the shadow's edge is not the jamb).
-    auto addPartsSeenThrough = [&]() {
-      for (const auto& [a, b] : throughBesideShadow(lo, hi))
+    auto addPartsSeenThrough = [&](int shadow_side) {
+      for (const auto& [a, b] : throughBesideShadow(lo, hi, shadow_side))
         addCandidate(a == lo ? s0 : colS(a), b == hi + 1 ? s1 : colS(b), false);
     };
     // A run a little wider than a door is itself a candidate, which would
     // take the place of a part overlapping it: the parts go first (1027 at
     // 33k rays: a doorway and its leaf's shadow 1.50 m wide, the leaf fitted
     // 28 deg off across both and the doorway refused as too wide).
-    // So is a run that reaches the end of the grid (0.3 m past the wall's
-    // face seen): its edge there is no jamb when the wall beyond lies in a
-    // leaf's shadow (4023 at 33k rays: a leaf open 121 deg towards the
-    // station shadows the wall's last 0.3 m; the run ran 1.14 m for 0.76).
-    const bool at_grid_end = lo == 0 || hi == cols - 1;
-    if (d_view > 0.1 && ((s1 - s0 > p.door_max_width && s1 - s0 <= p.door_max_width + 0.1) || at_grid_end))
-      addPartsSeenThrough();
+    // So is a run no wider than that which reaches an end of the grid (0.3 m
+    // past the wall's face seen): its edge there is no jamb when the wall
+    // beyond lies in a leaf's shadow (4023 at 33k rays: a leaf open 121 deg
+    // towards the station shadows the wall's last 0.3 m; the run ran 1.14 m
+    // for 0.76); only parts with the shadow towards that end.
+    const bool just_too_wide = s1 - s0 > p.door_max_width && s1 - s0 <= p.door_max_width + 0.1;
+    const int grid_end = lo == 0 && hi < cols - 1 ? -1 : hi == cols - 1 && lo > 0 ? 1 : 0;
+    if (d_view > 0.1 && just_too_wide) addPartsSeenThrough(0);
+    else if (d_view > 0.1 && grid_end != 0 && s1 - s0 <= p.door_max_width + 0.1) addPartsSeenThrough(grid_end);
     addCandidate(s0, s1, false);
     // A run wider than any door, hidden from the sensor by something in
     // front: a leaf swung towards the sensor shadows its doorway and the wall
@@ -825,7 +833,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
         else addCandidate(s1 - p.door_max_width, s1, false);
         if (out.size() > before) out.back().shadow_end = true;
       }
-      addPartsSeenThrough();
+      addPartsSeenThrough(0);
     }
     c = e + 1;
   }
@@ -864,13 +872,14 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   // only in the mean: depth noise of 1-3 cm (a closed door 3-3.6 m off)
   // hides trim 1.8 cm deep point by point, so (1) finds no head, while the
   // mean of a few hundred points stands out by 10-18 mm (rgbd 1020, 1022,
-  // 4002, 5014). Per row 5 cm high (slid in 1 cm steps, in as many of the
-  // doorway's columns as (1) asks): the mean offset of the face points
+  // 4002, 5014). Per row 5 cm high (slid in 1 cm steps, with points in 60 %
+  // of the doorway's columns): the mean offset of the face points
   // across the doorway less the mean of the two sides' means, the same rows
   // 12-30 cm beyond its edges (a plane turned a little about the vertical
   // tilts both sides alike, and the rows share any tilt about the
   // horizontal). A head: the best row stands out by casing_min_offset, and
-  // by as much from the median row. Only where no other candidate lies:
+  // by as much from the median row. Legs door_min_width to door_max_width
+  // apart (without (1)'s 10 cm of margin). Only where no other candidate lies:
   // noisy legs put a doorway's edges a few centimetres off, worse than the
   // other rules' where they find it (rgbd 4009, 5011, 5024).
   if (view) {

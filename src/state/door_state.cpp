@@ -321,7 +321,10 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
         ++cols_on_wall;
         for (int zb = 0; zb < nz; ++zb) held += side_cells[(static_cast<std::size_t>(side) * side_cols + col) * nz + zb];
       }
-      if (cols_on_wall >= side_cols / 2) best_side = std::max(best_side, static_cast<double>(held) / (cols_on_wall * nz));
+      // A side without a single point on its face was hidden (furniture in
+      // front, a leaf's shadow), not sampled: it tells nothing.
+      if (cols_on_wall >= side_cols / 2 && held > 0)
+        best_side = std::max(best_side, static_cast<double>(held) / (cols_on_wall * nz));
     }
     if (best_side >= 0) fit.sampling = std::clamp(best_side / kDenseWallCover, 0.5, 1.0);
   }
@@ -758,10 +761,10 @@ LeafFit fitLeaf(const segmentation::Points& points, const segmentation::WallPlan
       more.insert(more.end(), at.begin(), at.end());
     }
     // Rays only where support could beat the best so far and reach the
-    // least a leaf is taken with (half min_leaf_coverage of the shortest
+    // least a leaf is taken with (half min_leaf_coverage, times sampling, of the shortest
     // leaf's cells, in a doorway beyond doubt): where no leaf is seen (a
     // doorway seen through, its leaf out of sight) that leaves few or none.
-    globalSearch(more, std::max(best.score, 0.5 * p.min_leaf_coverage * na_min * nz));
+    globalSearch(more, std::max(best.score, 0.5 * p.min_leaf_coverage * fit.sampling * na_min * nz));
   }
   // Local search: the jamb seen from the wall can be off where a leaf hides
   // or shadows its own doorway; move the hinge along the wall and the angle.

@@ -172,7 +172,7 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
     // face there like trim. Where the leaf is seen (the best hypothesis
     // covers enough cells) but no pinned hypothesis fits, the doorway is
     // searched as if unpaired: hinge and length free (seed 1009, door 0).
-    if (!c.leaf.found && d.paired && c.leaf.best_coverage >= p.min_leaf_coverage) {
+    if (!c.leaf.found && d.paired && c.leaf.best_coverage >= p.min_leaf_coverage * c.leaf.sampling) {
       recognition::Doorway loose = d;
       loose.paired = false;
       LeafFit again = fitLeaf(pts, walls[c.wall], loose, floor_z, thicknessOf(d), viewpoint, p,

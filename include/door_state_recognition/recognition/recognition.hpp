@@ -67,8 +67,11 @@ struct Doorway {
 // a door's head, level with it again on both sides, form doorways too
 // (set_back). Candidates are door_min_width - 0.1 .. door_max_width + 0.1
 // wide; a shadow wider than any door gives one from its end nearer the
-// sensor (shadow_end), and a run too wide for a door the part of it seen
-// through between one of its ends and a shadow (a leaf's, beyond its hinge).
+// sensor (shadow_end), and a run too wide for a door, or one reaching an
+// end of the grid, the part of it seen through between one of its ends and
+// a shadow (a leaf's, beyond its hinge). In a camera frame, trim legs pair
+// under a head seen only in the mean offset of its points, where no other
+// candidate lies (depth noise hides trim point by point at a few metres).
 // no_return_is_free: the cloud is an organized camera frame, where a body
 // cell of a doorway without any return means nothing was there in range
 // (counted as seen through). With the frame's view (view), such a cell
