@@ -1033,6 +1033,26 @@ TEST(Stations, ADoorwayAtTheEndOfAWallSeenIsCutAtItsLeafsShadowInASparseScan) {
   EXPECT_EQ(e.reported_doors, 2);
 }
 
+TEST(Stations, APartSeenThroughPastTheEndOfAWallSeenIsNoDoorway) {
+  // Room 5027 at 133k rays a station (400k in all), the station beyond door
+  // 1, 7 m from a wardrobe whose face it takes for a short wall: past the
+  // face's end the grid's margin shows 3 columns of shadow, then the room
+  // seen through. A part seen through at a grid end is a doorway only
+  // within the wall's face seen (the shadow then covers the wall beyond its
+  // end); this one lay past it and was reported as a door 48 deg open.
+  const Pipeline pipe{Parameters()};
+  const Survey sv = survey(5027, 1, 133333, true);
+  ASSERT_EQ(sv.scans.size(), 3u);
+  const PipelineResult beyond = pipe.run(sv.scans[2], false, sv.origins[2]);
+  const eval::EvalResult b = sv.score(beyond);
+  SCOPED_TRACE(::testing::Message() << "seed=5027 station 2:" << describe(beyond) << trace(Scored{b, beyond, {}}));
+  EXPECT_TRUE(b.unmatched_report.empty());
+  EXPECT_GE(b.matched, 1);
+  const eval::EvalResult e = sv.score(pipe.runStations(sv.stations(), false));
+  EXPECT_EQ(e.matched, 2);
+  EXPECT_EQ(e.reported_doors, 2);
+}
+
 TEST(Stations, ALeafInASparseScanIsJudgedAgainstHowDenselyItsWallIsSampled) {
   // Room 5017 at 25k rays a station (100k in all, the station inside and one
   // beyond each of its three doors). From inside, door 1 (33 deg, swung

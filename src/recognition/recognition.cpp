@@ -794,9 +794,17 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     // (the station beyond room 1001's door at 50k rays). The part seen
     // through, beside the shadow, is a doorway candidate; the leaf search
     // decides (and moves the hinge, as the shadow's edge is not the jamb).
+    // At a grid end (shadow_side set), a part only within the wall's face
+    // seen (a column of play): the shadow covers the wall's continuation
+    // beyond its end; past that end, seen through, is the end of whatever
+    // the plane met (beyond-400k 5027: a wardrobe's face, 3 columns of
+    // shadow past it, gave a door there).
     auto addPartsSeenThrough = [&](int shadow_side) {
-      for (const auto& [a, b] : throughBesideShadow(lo, hi, shadow_side))
+      for (const auto& [a, b] : throughBesideShadow(lo, hi, shadow_side)) {
+        if (shadow_side < 0 && colS(a) < wall.s_min - cell) continue;
+        if (shadow_side > 0 && colS(b) > wall.s_max + cell) continue;
         addCandidate(a == lo ? s0 : colS(a), b == hi + 1 ? s1 : colS(b), false);
+      }
     };
     // A run a little wider than a door is itself a candidate, which would
     // take the place of a part overlapping it: the parts go first (1027 at
