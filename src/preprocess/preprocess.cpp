@@ -18,6 +18,7 @@
 #endif
 
 #include "door_state_recognition/preprocess/cell_map.hpp"
+#include "door_state_recognition/util/first_error.hpp"
 
 namespace dsr {
 namespace preprocess {
@@ -219,17 +220,10 @@ bool downsampleDense(long long n, const PointAt& point, const std::vector<std::u
   if (mid == n) {
     fill(first, 0, n);
   } else {
-    std::exception_ptr error;
+    util::FirstError error;
 #pragma omp parallel for schedule(static, 1) num_threads(2)
-    for (int t = 0; t < 2; ++t) {
-      try {
-        t == 0 ? fill(first, 0, mid) : fill(second, mid, n);
-      } catch (...) {
-#pragma omp critical(dsr_downsample_error)
-        if (!error) error = std::current_exception();
-      }
-    }
-    if (error) std::rethrow_exception(error);
+    for (int t = 0; t < 2; ++t) error.run([&] { t == 0 ? fill(first, 0, mid) : fill(second, mid, n); });
+    error.rethrow();
   }
   // The second half's cells: the first's number when met there (shared), else kNone.
   std::vector<std::uint32_t> shared(second.sum.size());
