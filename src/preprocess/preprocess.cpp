@@ -108,6 +108,8 @@ Points sanitize(const pcl::PointCloud<pcl::PointXYZ>& cloud, double max_abs) {
 namespace {
 
 constexpr std::uint64_t kNoKey = ~std::uint64_t(0);  // packed keys use 63 bits
+// downsampleDense's room made at once in each half: cells, and bricks of 64 cells.
+constexpr std::size_t kReserveCells = std::size_t(1) << 20, kReserveBricks = std::size_t(1) << 18;
 
 // The voxel grid of the points point(i), i < n, whose key(i) is not kNoKey.
 // Cells are numbered in order of first occurrence: the output keeps the input's order.
@@ -182,13 +184,18 @@ bool downsampleDense(long long n, const PointAt& point, const std::vector<std::u
   };
   auto fill = [&](Half& h, long long i0, long long i1) {
     h.brick.assign(static_cast<std::size_t>(volume), CellMap::kNone);
-    // Room for a cell per point (only what is used is touched): the lists
-    // never move as they grow.
+    // Room for a cell (and a brick) per point, up to kReserveCells cells and
+    // kReserveBricks bricks (only what is used is touched): the lists of a
+    // camera frame or a laser scan of a few 100k points never move as they
+    // grow; a larger cloud's grow past that. Room for all of a cloud of
+    // max_points would be gigabytes of address space (64 entries a brick),
+    // refused under ulimit -v or strict overcommit.
     const std::size_t most = static_cast<std::size_t>(i1 - i0);
-    h.sum.reserve(most);
-    h.count.reserve(most);
-    h.keys.reserve(most);
-    h.cell.reserve(64 * std::min(most, static_cast<std::size_t>(volume)));
+    const std::size_t cells = std::min(most, kReserveCells);
+    h.sum.reserve(cells);
+    h.count.reserve(cells);
+    h.keys.reserve(cells);
+    h.cell.reserve(64 * std::min({cells, static_cast<std::size_t>(volume), kReserveBricks}));
     std::uint64_t last_key = kNoKey;
     std::uint32_t last_id = 0;
     for (long long i = i0; i < i1; ++i) {
