@@ -676,8 +676,14 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
 #ifdef _OPENMP
   threads = std::min(2, omp_get_max_threads());
 #endif
+  // The rounds drawn on the master thread (the other takes the tasks at the
+  // region's end): libgomp keeps the dependences of the tasks a thread makes
+  // in that thread's implicit task, and a pool thread's (where a single
+  // construct may put the rounds) can be set up afresh for the next region
+  // before it is freed (LeakSanitizer saw it leak); the master's is freed as
+  // its region ends.
 #pragma omp parallel num_threads(threads) if (threads > 1)
-#pragma omp single
+#pragma omp master
   try {
     for (int round = 0; round < 4 * p.max_walls; ++round) {
       if (static_cast<int>(pool.size()) < p.min_wall_points) break;
