@@ -31,6 +31,7 @@
 #include "door_state_recognition/sim/ground_truth.hpp"
 #include "door_state_recognition/sim/scene.hpp"
 #include "door_state_recognition/sim/sensors.hpp"
+#include "door_state_recognition/util/omp_spin.hpp"
 
 using json = nlohmann::json;
 using namespace dsr;
@@ -376,9 +377,20 @@ std::string shell(const char* cmd) {
   return out;
 }
 
+// How the OpenMP threads wait, as the environment (libgomp reads it at
+// start, after util/omp_spin.hpp's default) says.
+std::string ompWait() {
+  const char* spin = std::getenv("GOMP_SPINCOUNT");
+  const char* policy = std::getenv("OMP_WAIT_POLICY");
+  std::string s = std::string("GOMP_SPINCOUNT=") + (spin ? spin : policy ? "unset" : "unset (libgomp default 300000)");
+  if (policy) s += std::string(", OMP_WAIT_POLICY=") + policy;
+  return s;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  dsr::util::shortOmpSpin(argv);  // before anything else: the program may be run again
   Options opt;
   try {
     opt = parse(argc, argv);
@@ -419,7 +431,8 @@ int main(int argc, char** argv) {
                   {"cpu", shell("lscpu | sed -n 's/^Model name: *//p' | head -n1")},
                   {"mem_gb", std::round(sysconf(_SC_PHYS_PAGES) * double(sysconf(_SC_PAGESIZE)) / (1 << 30))},
                   {"kernel", shell("uname -r")},
-                  {"loadavg_at_start", shell("cut -d' ' -f1-3 /proc/loadavg")}};
+                  {"loadavg_at_start", shell("cut -d' ' -f1-3 /proc/loadavg")},
+                  {"omp_wait", ompWait()}};
   char date[64];
   const std::time_t now = std::time(nullptr);
   std::strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", std::gmtime(&now));
@@ -428,6 +441,7 @@ int main(int argc, char** argv) {
               machine["loadavg_at_start"].get<std::string>().c_str(), opt.runs, opt.baseline_runs,
               static_cast<unsigned long long>(opt.seed));
   if (!opt.note.empty()) std::printf("%s\n", opt.note.c_str());
+  std::printf("OpenMP threads wait: %s (util/omp_spin.hpp)\n", machine["omp_wait"].get<std::string>().c_str());
   std::printf("ours: dsr::Pipeline without reconstruction; stock: pcl::VoxelGrid, NormalEstimationOMP (all cores), "
               "iterative SACSegmentation (SACMODEL_PARALLEL_PLANE), RegionGrowing, MomentOfInertiaEstimation, "
               "BoundaryEstimation; doors on both by our findDoorways + fitLeaf\n");

@@ -10,6 +10,9 @@
 #include <limits>
 #include <sstream>
 
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include "door_state_recognition/eval/evaluation.hpp"
 #include "door_state_recognition/io/cloud_reader.hpp"
 #include "door_state_recognition/io/report.hpp"
@@ -178,6 +181,58 @@ TEST(Preprocess, VoxelGridKeepsOneCentroidPerVoxel) {
   ASSERT_EQ(out.size(), 2u);
   EXPECT_NEAR(out[0].x(), 0.02f, 1e-6);
   EXPECT_NEAR(out[1].x(), 0.25f, 1e-6);
+}
+
+// The voxel grid of a large cloud whose cells' box is wide but whose points
+// fill few cells (two small clusters at opposite corners) within a bounded
+// address space (RLIMIT_AS, as ulimit -v sets it), in a process of its own:
+// its room made at once for the cells (64 entries a brick of its box) stays
+// within a cap instead of a brick per point, which asked for 256 MB a half
+// for these 2M points (and gigabytes for max_points).
+TEST(Preprocess, TheVoxelGridOfALargeSparseCloudFitsInABoundedAddressSpace) {
+#ifdef __SANITIZE_ADDRESS__
+  GTEST_SKIP() << "AddressSanitizer's shadow memory and quarantine are address space of their own";
+#endif
+#ifdef GTEST_FLAG_SET
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+#else
+  ::testing::FLAGS_gtest_death_test_style = "threadsafe";
+#endif
+  constexpr double kLeaf = 0.05;
+  // n points on the centres of the 20^3 cells of a 1 m cube at the origin
+  // and of one 30 m off on every axis, by turns.
+  auto clusters = [&](std::size_t n) {
+    pcl::PointCloud<pcl::PointXYZ> cloud;
+    cloud.points.resize(n);
+    cloud.width = static_cast<std::uint32_t>(n);
+    cloud.height = 1;
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t c = (i / 2) % 8000;
+      const float off = i % 2 ? 30.0f : 0.0f;
+      auto at = [&](std::size_t k) { return off + static_cast<float>((static_cast<double>(k) + 0.5) * kLeaf); };
+      cloud.points[i] = pcl::PointXYZ(at(c % 20), at(c / 20 % 20), at(c / 400));
+    }
+    return cloud;
+  };
+  // In the process of its own: 0 done right, 1 out of memory, else failed.
+  auto child = [&]() -> int {
+    const pcl::PointCloud<pcl::PointXYZ> cloud = clusters(2000000);
+    // The threads (and their heaps) made first, on a small cloud of the same
+    // kind: the limit is on what this voxel grid asks for.
+    if (preprocess::sanitizeAndDownsample(clusters(60000), 1e3, kLeaf).size() != 16000) return 3;
+    std::ifstream statm("/proc/self/statm");
+    unsigned long long pages = 0;
+    statm >> pages;
+    rlimit lim;
+    lim.rlim_cur = lim.rlim_max = pages * static_cast<rlim_t>(sysconf(_SC_PAGESIZE)) + (rlim_t(400) << 20);
+    if (setrlimit(RLIMIT_AS, &lim) != 0) return 4;
+    try {
+      return preprocess::sanitizeAndDownsample(cloud, 1e3, kLeaf).size() == 16000 ? 0 : 2;
+    } catch (const std::bad_alloc&) {
+      return 1;
+    }
+  };
+  EXPECT_EXIT(std::_Exit(child()), ::testing::ExitedWithCode(0), "");
 }
 
 TEST(StateLines, TotalLeastSquaresFitsALineParallelToY) {

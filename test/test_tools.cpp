@@ -71,6 +71,29 @@ TEST(Tools, HelpExitsZeroAndWrongArgumentsExitTwo) {
   EXPECT_EQ(run("door_state_eval /nonexistent/a.json /nonexistent/b.json").code, 2);
 }
 
+// util::shortOmpSpin: the tools run (again) with GOMP_SPINCOUNT 10000 unless
+// GOMP_SPINCOUNT or OMP_WAIT_POLICY is set, as the bench's header says.
+TEST(Tools, ToolsRunWithAShortOpenMpSpinUnlessTheEnvironmentSaysOtherwise) {
+  const fs::path dir = tempDir("spin");
+  auto header = [&](const std::string& env) {
+    const std::string cmd = "env -u GOMP_SPINCOUNT -u OMP_WAIT_POLICY " + env + " " + DSR_BIN_DIR +
+                            "/door_state_bench --no-rgbd --sizes '' --runs 1 --accuracy-scenes 0 --json " +
+                            (dir / "b.json").string() + " 2>/dev/null";
+    FILE* p = popen(cmd.c_str(), "r");
+    std::string out;
+    char buf[4096];
+    while (p && fgets(buf, sizeof buf, p)) out += buf;
+    if (p) pclose(p);
+    const std::size_t at = out.find("OpenMP threads wait: ");
+    return at == std::string::npos ? std::string("none") : out.substr(at, out.find('\n', at) - at);
+  };
+  EXPECT_NE(header("").find("GOMP_SPINCOUNT=10000"), std::string::npos) << header("");
+  EXPECT_NE(header("GOMP_SPINCOUNT=77").find("GOMP_SPINCOUNT=77"), std::string::npos);
+  const std::string passive = header("OMP_WAIT_POLICY=passive");
+  EXPECT_NE(passive.find("GOMP_SPINCOUNT=unset, OMP_WAIT_POLICY=passive"), std::string::npos) << passive;
+  fs::remove_all(dir);
+}
+
 TEST(Tools, SimulatorWritesCloudTruthAndBagDeterministically) {
   const fs::path dir = tempDir("sim");
   const std::string common = " --seed 5 --points 20000 --formats pcd,ply,json,bag --quiet";

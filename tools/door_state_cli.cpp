@@ -12,6 +12,7 @@
 #include "door_state_recognition/io/cloud_reader.hpp"
 #include "door_state_recognition/io/report.hpp"
 #include "door_state_recognition/pipeline/pipeline.hpp"
+#include "door_state_recognition/util/omp_spin.hpp"
 
 namespace {
 
@@ -51,6 +52,7 @@ using dsr::tools::UsageError;
 }  // namespace
 
 int main(int argc, char** argv) {
+  dsr::util::shortOmpSpin(argv);  // before anything else: the program may be run again
   std::string config, up, json_out, recon_out;
   std::vector<std::string> inputs;
   bool quiet = false, verbose = false;

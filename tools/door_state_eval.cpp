@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "door_state_recognition/eval/evaluation.hpp"
+#include "door_state_recognition/util/omp_spin.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -106,6 +107,7 @@ int usageError(const std::string& msg) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  dsr::util::shortOmpSpin(argv);  // before anything else: the program may be run again
   double max_dist = 0.5;
   bool in_view_only = false;
   std::string pairs_file;

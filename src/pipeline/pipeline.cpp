@@ -21,7 +21,7 @@ namespace dsr {
 namespace {
 
 // recognition::findDoorways on one wall as an OpenMP task, into *out; the
-// first exception thrown goes to *error.
+// first exception thrown is kept in *error.
 struct DoorwayJob {
   std::shared_ptr<const segmentation::WallPlane> wall;
   std::shared_ptr<std::vector<recognition::Doorway>> out;
@@ -31,18 +31,15 @@ struct DoorwayJob {
   const Parameters* p;
   bool organized;
   const segmentation::ViewTop* view;  // a camera frame's, or null
-  std::exception_ptr* error;
+  util::FirstError* error;
 };
 void startDoorwayTask(const DoorwayJob& job_in) {
   const DoorwayJob job = job_in;
 #pragma omp task firstprivate(job)
-  try {
+  job.error->run([&] {
     *job.out = recognition::findDoorways(*job.pts, *job.wall, job.floor_z, job.top_z, job.viewpoint, *job.p, job.organized,
                                          job.view);
-  } catch (...) {
-#pragma omp critical(dsr_doorway_task_error)
-    if (!*job.error) *job.error = std::current_exception();
-  }
+  });
 }
 
 }  // namespace
@@ -202,7 +199,7 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   // Each wall's doorways are sought (as findDoors would) as soon as
   // findWalls takes the wall, as a task beside its rounds still to come.
   std::vector<std::shared_ptr<std::vector<recognition::Doorway>>> found;  // per wall, filled by its task
-  std::exception_ptr doorway_error;
+  util::FirstError doorway_error;
   auto onWall = [&](std::size_t wi, const segmentation::WallPlane& wall) {
     if (found.size() <= wi) found.resize(wi + 1);
     found[wi] = std::make_shared<std::vector<recognition::Doorway>>();
@@ -211,7 +208,7 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   };
   const std::vector<segmentation::WallPlane> walls = segmentation::findWalls(
       pts, normals, floor_z, top_z, fc.ceiling.has_value(), viewpoint.head<2>().cast<double>(), p, &view, onWall);
-  if (doorway_error) std::rethrow_exception(doorway_error);
+  doorway_error.rethrow();
   std::vector<std::vector<recognition::Doorway>> doorways(walls.size());
   for (std::size_t wi = 0; wi < walls.size(); ++wi)
     doorways[wi] = wi < found.size() && found[wi]

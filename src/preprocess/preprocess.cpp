@@ -18,6 +18,7 @@
 #endif
 
 #include "door_state_recognition/preprocess/cell_map.hpp"
+#include "door_state_recognition/util/first_error.hpp"
 
 namespace dsr {
 namespace preprocess {
@@ -107,6 +108,8 @@ Points sanitize(const pcl::PointCloud<pcl::PointXYZ>& cloud, double max_abs) {
 namespace {
 
 constexpr std::uint64_t kNoKey = ~std::uint64_t(0);  // packed keys use 63 bits
+// downsampleDense's room made at once in each half: cells, and bricks of 64 cells.
+constexpr std::size_t kReserveCells = std::size_t(1) << 20, kReserveBricks = std::size_t(1) << 18;
 
 // The voxel grid of the points point(i), i < n, whose key(i) is not kNoKey.
 // Cells are numbered in order of first occurrence: the output keeps the input's order.
@@ -153,8 +156,10 @@ bool downsampleDense(long long n, const PointAt& point, const std::vector<std::u
   const double volume = static_cast<double>(dims.x()) * dims.y() * dims.z();
   if (volume > 2.0 * static_cast<double>(n) + (1 << 20)) return false;
   // The cell entry of key k in a dense index (brick -> its 64 cells), the
-  // brick made when missing.
-  auto entry = [&](std::vector<std::uint32_t>& brick, std::vector<std::uint32_t>& cell, std::uint64_t k) -> std::uint32_t& {
+  // brick made when missing. The box is held by value: a copy of it in a
+  // loop keeps it in registers.
+  auto entry = [blo, dims, brickOf](std::vector<std::uint32_t>& brick, std::vector<std::uint32_t>& cell,
+                                    std::uint64_t k) -> std::uint32_t& {
     const Eigen::Vector3i c = unpackCell(k);
     const Eigen::Vector3i b(brickOf(c.x()), brickOf(c.y()), brickOf(c.z()));
     std::uint32_t& kb = brick[(static_cast<std::size_t>(b.z() - blo.z()) * dims.y() + (b.y() - blo.y())) * dims.x() +
@@ -181,35 +186,55 @@ bool downsampleDense(long long n, const PointAt& point, const std::vector<std::u
   };
   auto fill = [&](Half& h, long long i0, long long i1) {
     h.brick.assign(static_cast<std::size_t>(volume), CellMap::kNone);
-    // Room for a cell per point (only what is used is touched): the lists
-    // never move as they grow.
+    // Room for a cell (and a brick) per point, up to kReserveCells cells and
+    // kReserveBricks bricks (only what is used is touched): the lists of a
+    // camera frame or a laser scan of a few 100k points never move as they
+    // grow; a larger cloud's grow past that. Room for all of a cloud of
+    // max_points would be gigabytes of address space (64 entries a brick),
+    // refused under ulimit -v or strict overcommit.
     const std::size_t most = static_cast<std::size_t>(i1 - i0);
-    h.sum.reserve(most);
-    h.count.reserve(most);
-    h.keys.reserve(most);
-    h.cell.reserve(64 * std::min(most, static_cast<std::size_t>(volume)));
+    const std::size_t cells = std::min(most, kReserveCells);
+    h.sum.reserve(cells);
+    h.count.reserve(cells);
+    h.keys.reserve(cells);
+    h.cell.reserve(64 * std::min({cells, static_cast<std::size_t>(volume), kReserveBricks}));
     std::uint64_t last_key = kNoKey;
     std::uint32_t last_id = 0;
+    // A scan visits a voxel in runs of points: the run's cell is known, and
+    // its sum and count are kept here while the run lasts (the same
+    // additions in the same order as into the lists), written back when it
+    // ends. The keys and points through local copies: nothing in the loop
+    // can move them.
+    const std::uint64_t* const keys = key.data();
+    const PointAt at = point;
+    const auto cellEntry = entry;
+    Eigen::Vector3d run_sum = Eigen::Vector3d::Zero();
+    int run_count = 0;  // 0: no run yet
     for (long long i = i0; i < i1; ++i) {
-      if (key[i] == kNoKey) continue;
-      // A scan visits a voxel in runs of points: the run's cell is known.
-      if (key[i] != last_key) {
-        std::uint32_t& id = entry(h.brick, h.cell, key[i]);
-        if (id == CellMap::kNone) {
-          id = static_cast<std::uint32_t>(h.sum.size());
-          h.sum.push_back(point(i).template cast<double>());
-          h.count.push_back(1);
-          h.keys.push_back(key[i]);
-          last_key = key[i];
-          last_id = id;
-          continue;
-        }
-        last_key = key[i];
-        last_id = id;
+      const std::uint64_t k = keys[i];
+      if (k == kNoKey) continue;
+      if (k == last_key) {
+        run_sum += at(i).template cast<double>();
+        ++run_count;
+        continue;
       }
-      h.sum[last_id] += point(i).template cast<double>();
-      ++h.count[last_id];
+      if (run_count > 0) h.sum[last_id] = run_sum, h.count[last_id] = run_count;
+      std::uint32_t& id = cellEntry(h.brick, h.cell, k);
+      if (id == CellMap::kNone) {
+        id = static_cast<std::uint32_t>(h.sum.size());
+        h.sum.push_back(at(i).template cast<double>());
+        h.count.push_back(1);
+        h.keys.push_back(k);
+        run_sum = h.sum.back();
+        run_count = 1;
+      } else {
+        run_sum = h.sum[id] + at(i).template cast<double>();
+        run_count = h.count[id] + 1;
+      }
+      last_key = k;
+      last_id = id;
     }
+    if (run_count > 0) h.sum[last_id] = run_sum, h.count[last_id] = run_count;
   };
   long long mid = n;
 #ifdef _OPENMP
@@ -219,17 +244,10 @@ bool downsampleDense(long long n, const PointAt& point, const std::vector<std::u
   if (mid == n) {
     fill(first, 0, n);
   } else {
-    std::exception_ptr error;
+    util::FirstError error;
 #pragma omp parallel for schedule(static, 1) num_threads(2)
-    for (int t = 0; t < 2; ++t) {
-      try {
-        t == 0 ? fill(first, 0, mid) : fill(second, mid, n);
-      } catch (...) {
-#pragma omp critical(dsr_downsample_error)
-        if (!error) error = std::current_exception();
-      }
-    }
-    if (error) std::rethrow_exception(error);
+    for (int t = 0; t < 2; ++t) error.run([&] { t == 0 ? fill(first, 0, mid) : fill(second, mid, n); });
+    error.rethrow();
   }
   // The second half's cells: the first's number when met there (shared), else kNone.
   std::vector<std::uint32_t> shared(second.sum.size());
@@ -445,7 +463,7 @@ Points voxelDownsample(const Points& points, double leaf) {
     const Eigen::Vector3i c = cellOf(points[i], inv);
     key[i] = packCell(c.x(), c.y(), c.z());
   }
-  return downsample(n, [&](long long i) { return points[i]; }, key);
+  return downsample(n, [pts = points.data()](long long i) { return pts[i]; }, key);
 }
 
 Points sanitizeAndDownsample(const pcl::PointCloud<pcl::PointXYZ>& cloud, double max_abs, double leaf,
@@ -476,7 +494,7 @@ Points sanitizeAndDownsample(const pcl::PointCloud<pcl::PointXYZ>& cloud, double
   if (kept) *kept = static_cast<std::size_t>(valid);
   const KeyBox box{Eigen::Vector3i(lx, ly, lz), Eigen::Vector3i(hx, hy, hz), valid > 0};
   return downsample(
-      n, [&](long long i) { return Eigen::Vector3f(cloud.points[i].x, cloud.points[i].y, cloud.points[i].z); }, key,
+      n, [pts = cloud.points.data()](long long i) { return Eigen::Vector3f(pts[i].x, pts[i].y, pts[i].z); }, key,
       &box);
 }
 

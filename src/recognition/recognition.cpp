@@ -1,6 +1,7 @@
 #include "door_state_recognition/recognition/recognition.hpp"
 #include "door_state_recognition/util/floor.hpp"
 #include "door_state_recognition/util/radix_sort.hpp"
+#include "door_state_recognition/util/first_error.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -213,22 +214,12 @@ void bothHalves(bool split, const F& f) {
     f(0);
     return;
   }
-  std::exception_ptr error;
+  util::FirstError error;
 #pragma omp task shared(error, f)
-  try {
-    f(1);
-  } catch (...) {
-#pragma omp critical(dsr_both_halves_error)
-    if (!error) error = std::current_exception();
-  }
-  try {
-    f(0);
-  } catch (...) {
-#pragma omp critical(dsr_both_halves_error)
-    if (!error) error = std::current_exception();
-  }
+  error.run([&] { f(1); });
+  error.run([&] { f(0); });
 #pragma omp taskwait
-  if (error) std::rethrow_exception(error);
+  error.rethrow();
 }
 
 }  // namespace

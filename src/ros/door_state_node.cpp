@@ -3,7 +3,10 @@
 #include <nodelet/loader.h>
 #include <ros/ros.h>
 
+#include "door_state_recognition/util/omp_spin.hpp"
+
 int main(int argc, char** argv) {
+  dsr::util::shortOmpSpin(argv);  // before anything else: the program may be run again
   ros::init(argc, argv, "door_state_node");
   nodelet::Loader loader;
   const nodelet::M_string remappings(ros::names::getRemappings());

@@ -1,6 +1,7 @@
 #include "door_state_recognition/segmentation/neighbour_grid.hpp"
 
 #include "door_state_recognition/preprocess/cell_map.hpp"
+#include "door_state_recognition/util/first_error.hpp"
 
 #include <exception>
 #include <limits>
@@ -24,14 +25,8 @@ namespace {
 // body() is rethrown here.
 template <class F>
 void withTasks(const F& body) {
-  std::exception_ptr error;
-  auto guarded = [&] {
-    try {
-      body();
-    } catch (...) {
-      error = std::current_exception();
-    }
-  };
+  util::FirstError error;
+  auto guarded = [&] { error.run(body); };
 #ifdef _OPENMP
   if (!omp_in_parallel() && omp_get_max_threads() >= 2) {
 #pragma omp parallel num_threads(2)
@@ -43,7 +38,7 @@ void withTasks(const F& body) {
 #else
   guarded();
 #endif
-  if (error) std::rethrow_exception(error);
+  error.rethrow();
 }
 
 }  // namespace

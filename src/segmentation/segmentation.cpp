@@ -671,13 +671,19 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
   // and a round is kept only if the walls found before it leave room
   // (max_walls), as in a loop that waited for them: rounds drawn past the
   // last are dropped unused.
-  std::exception_ptr error;
+  util::FirstError error;
   int threads = 1;
 #ifdef _OPENMP
   threads = std::min(2, omp_get_max_threads());
 #endif
+  // The rounds drawn on the master thread (the other takes the tasks at the
+  // region's end): libgomp keeps the dependences of the tasks a thread makes
+  // in that thread's implicit task, and a pool thread's (where a single
+  // construct may put the rounds) can be set up afresh for the next region
+  // before it is freed (LeakSanitizer saw it leak); the master's is freed as
+  // its region ends.
 #pragma omp parallel num_threads(threads) if (threads > 1)
-#pragma omp single
+#pragma omp master
   try {
     for (int round = 0; round < 4 * p.max_walls; ++round) {
       if (static_cast<int>(pool.size()) < p.min_wall_points) break;
@@ -814,23 +820,22 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
       auto round_inl = std::make_shared<std::vector<int>>(std::move(inl));
       const bool defer = round_inl->size() >= kTaskInliers;
 #pragma omp task default(shared) firstprivate(best_pt, best_n, dir, round_inl) depend(inout : walls) if (defer)
-      try {
-        if (!error && static_cast<int>(walls.size()) < p.max_walls) {
+      error.run([&] {
+        if (!error.failed() && static_cast<int>(walls.size()) < p.max_walls) {
           const std::size_t before = walls.size();
           addWallSegments(points, *round_inl, best_pt, dir, best_n, floor_z, height_top, ceiling_known, p, walls, view,
                           &viewpoint);
-        if (on_wall)
+          if (on_wall)
             for (std::size_t i = before; i < walls.size(); ++i) on_wall(i, walls[i]);
         }
-      } catch (...) {
-        error = std::current_exception();
-      }
+      });
     }
   } catch (...) {
+    // Kept after the rules of the rounds drawn before it, whose exception comes first.
 #pragma omp taskwait
-    if (!error) error = std::current_exception();
+    error.keep(std::current_exception());
   }
-  if (error) std::rethrow_exception(error);
+  error.rethrow();
   return walls;
 }
 

@@ -1,5 +1,6 @@
 #include "door_state_recognition/state/door_state.hpp"
 #include "door_state_recognition/util/floor.hpp"
+#include "door_state_recognition/util/first_error.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -69,17 +70,10 @@ inline double asinAbove(double x) {
 // one. The first exception thrown is rethrown here.
 template <class F>
 void forEachTask(std::size_t n, const F& f) {
-  std::exception_ptr error;
+  util::FirstError error;
 #pragma omp taskloop grainsize(1) shared(error, f)
-  for (long long i = 0; i < static_cast<long long>(n); ++i) {
-    try {
-      f(static_cast<std::size_t>(i));
-    } catch (...) {
-#pragma omp critical(dsr_fit_leaf_error)
-      if (!error) error = std::current_exception();
-    }
-  }
-  if (error) std::rethrow_exception(error);
+  for (long long i = 0; i < static_cast<long long>(n); ++i) error.run([&] { f(static_cast<std::size_t>(i)); });
+  error.rethrow();
 }
 
 // Where a sensor ray from v (height vz) along r (rising dz over its length)

@@ -7,6 +7,7 @@
 
 #include "door_state_recognition/recognition/recognition.hpp"
 #include "door_state_recognition/state/door_state.hpp"
+#include "door_state_recognition/util/first_error.hpp"
 
 namespace dsr {
 namespace state {
@@ -38,17 +39,10 @@ constexpr double kLeafWallShare = 0.3;
 // exception thrown is rethrown here (none may escape an OpenMP region).
 template <class F>
 void parallelFor(std::size_t n, F f) {
-  std::exception_ptr error;
+  util::FirstError error;
 #pragma omp parallel for schedule(dynamic, 1)
-  for (long long i = 0; i < static_cast<long long>(n); ++i) {
-    try {
-      f(static_cast<std::size_t>(i));
-    } catch (...) {
-#pragma omp critical(dsr_parallel_for_error)
-      if (!error) error = std::current_exception();
-    }
-  }
-  if (error) std::rethrow_exception(error);
+  for (long long i = 0; i < static_cast<long long>(n); ++i) error.run([&] { f(static_cast<std::size_t>(i)); });
+  error.rethrow();
 }
 
 // The foot of a closed leaf, over its width in 5 cm columns: `seen` the

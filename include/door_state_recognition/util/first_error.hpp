@@ -4,6 +4,7 @@
 #pragma once
 
 #include <exception>
+#include <utility>
 
 namespace dsr {
 namespace util {
@@ -16,9 +17,20 @@ class FirstError {
     try {
       f();
     } catch (...) {
-#pragma omp critical(dsr_first_error)
-      if (!error_) error_ = std::current_exception();
+      keep(std::current_exception());
     }
+  }
+  // e kept if it is the first.
+  void keep(std::exception_ptr e) {
+#pragma omp critical(dsr_first_error)
+    if (!error_) error_ = std::move(e);
+  }
+  // Whether an exception is kept.
+  bool failed() const {
+    bool kept;
+#pragma omp critical(dsr_first_error)
+    kept = static_cast<bool>(error_);
+    return kept;
   }
   // Rethrows the exception kept, if any.
   void rethrow() const {
