@@ -316,11 +316,13 @@ TEST(Segmentation, FloorCeilingAndWallsOfASimulatedRoom) {
 // ----------------------------------------------------------------- door states
 
 // The match of truth door `door` in a scored scene, or null when it was missed.
-const eval::DoorMatch* matchOf(const Scored& s, int door) {
-  for (const auto& m : s.eval.matches)
+const eval::DoorMatch* matchOf(const eval::EvalResult& e, int door) {
+  for (const auto& m : e.matches)
     if (m.truth_index == door) return &m;
   return nullptr;
 }
+
+const eval::DoorMatch* matchOf(const Scored& s, int door) { return matchOf(s.eval, door); }
 
 // Truth door `door` found with its state right, and no door reported that
 // matches no truth: the match, or null (a failure added) when it was missed.
@@ -1074,9 +1076,7 @@ TEST(Stations, ADoorwayAtTheEndOfAWallSeenIsCutAtItsLeafsShadowInASparseScan) {
   const PipelineResult inside = pipe.run(sv.scans[0], false, sv.origins[0]);
   const eval::EvalResult i = sv.score(inside);
   SCOPED_TRACE(::testing::Message() << "seed=4023 inside:" << describe(inside) << trace(Scored{i, inside, {}}));
-  const eval::DoorMatch* m = nullptr;
-  for (const auto& x : i.matches)
-    if (x.truth_index == 0) m = &x;
+  const eval::DoorMatch* m = matchOf(i, 0);
   ASSERT_NE(m, nullptr) << "door 0 (121 deg) not found from inside";
   EXPECT_FALSE(m->angle_is_lower_bound);
   EXPECT_LT(m->angle_error_deg, 5.0);
@@ -1125,9 +1125,7 @@ TEST(Stations, ALeafInASparseScanIsJudgedAgainstHowDenselyItsWallIsSampled) {
   const PipelineResult inside = pipe.run(sv.scans[0], false, sv.origins[0]);
   const eval::EvalResult i = sv.score(inside);
   SCOPED_TRACE(::testing::Message() << "seed=5017 inside:" << describe(inside) << trace(Scored{i, inside, {}}));
-  const eval::DoorMatch* m = nullptr;
-  for (const auto& x : i.matches)
-    if (x.truth_index == 1) m = &x;
+  const eval::DoorMatch* m = matchOf(i, 1);
   ASSERT_NE(m, nullptr) << "door 1 (33 deg) not found from inside";
   EXPECT_FALSE(m->angle_is_lower_bound);
   EXPECT_LT(m->angle_error_deg, 3.0);
