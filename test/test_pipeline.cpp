@@ -840,6 +840,14 @@ struct Survey {
   eval::EvalResult score(const PipelineResult& r) const {
     return eval::evaluate(truth, io::reportJson(r, "sim"), 0.5, true);
   }
+  // Station k run on its own, scored against the whole room's truth.
+  Scored station(const Pipeline& pipe, std::size_t k) const {
+    Scored s;
+    s.result = pipe.run(scans.at(k), false, origins.at(k));
+    s.eval = score(s.result);
+    s.truth = truth;
+    return s;
+  }
 };
 
 // `stations` scan positions in the room of randomRoom(seed), and with
@@ -869,6 +877,24 @@ std::string describe(const PipelineResult& r) {
   for (const auto& d : r.doors)
     os << " " << toString(d.state) << "@" << d.opening_angle_deg << (d.angle_is_lower_bound ? "(bound)" : "");
   return os.str();
+}
+
+// A door whose leaf was measured (not bounded by free space): angle within
+// max_angle_deg, hinge within 10 cm, state right.
+void expectMeasured(const eval::DoorMatch& m, double max_angle_deg = 3.0) {
+  EXPECT_FALSE(m.angle_is_lower_bound) << "door " << m.truth_index;
+  EXPECT_LT(m.angle_error_deg, max_angle_deg) << "door " << m.truth_index;
+  EXPECT_LT(m.hinge_error_m, 0.1) << "door " << m.truth_index;
+  EXPECT_TRUE(m.state_correct) << "door " << m.truth_index;
+}
+
+// The whole survey, its stations merged, reports exactly its `doors` true
+// doors, each with its state right.
+void expectSurveyFindsEveryDoor(const Pipeline& pipe, const Survey& sv, int doors) {
+  const eval::EvalResult e = sv.score(pipe.runStations(sv.stations(), false));
+  EXPECT_EQ(e.matched, doors) << "survey";
+  EXPECT_EQ(e.reported_doors, doors) << "survey";
+  EXPECT_EQ(e.state_correct, doors) << "survey";
 }
 
 TEST(Stations, ADoorOutOfOneStationsSightIsMeasuredFromAnother) {
@@ -1000,10 +1026,7 @@ TEST(Stations, AStationBeyondEachDoorMeasuresTheLeavesSwungOutOfTheRoom) {
     EXPECT_EQ(t["swing"], "away_from_viewer");
     EXPECT_EQ(e.reported_doors, 1);
     ASSERT_EQ(e.matched, 1);
-    EXPECT_TRUE(e.matches[0].state_correct);
-    EXPECT_FALSE(e.matches[0].angle_is_lower_bound);
-    EXPECT_LT(e.matches[0].angle_error_deg, 3.0);
-    EXPECT_LT(e.matches[0].hinge_error_m, 0.1);
+    expectMeasured(e.matches[0]);
   }
 }
 
@@ -1019,16 +1042,13 @@ TEST(Stations, ADoorwaySeenThroughBesideTheShadowOfItsLeafIsFoundInASparseScan) 
   const Survey sv = survey(1001, 1, 50000, true);
   ASSERT_EQ(sv.scans.size(), 2u);
   ASSERT_EQ(sv.truth["doors"].size(), 1u);
-  const PipelineResult beyond = pipe.run(sv.scans[1], false, sv.origins[1]);
-  const eval::EvalResult b = sv.score(beyond);
+  const Scored beyond = sv.station(pipe, 1);
+  SCOPED_TRACE(::testing::Message() << "seed=1001 beyond:" << describe(beyond.result));
+  EXPECT_EQ(beyond.eval.reported_doors, 1);
+  const eval::DoorMatch* m = matchOf(beyond, 0);
+  ASSERT_NE(m, nullptr) << "the door not found from beyond";
+  expectMeasured(*m);
   const eval::EvalResult e = sv.score(pipe.runStations(sv.stations(), false));
-  SCOPED_TRACE(::testing::Message() << "seed=1001 beyond:" << describe(beyond));
-  EXPECT_EQ(b.reported_doors, 1);
-  ASSERT_EQ(b.matched, 1);
-  EXPECT_FALSE(b.matches[0].angle_is_lower_bound);
-  EXPECT_LT(b.matches[0].angle_error_deg, 3.0);
-  EXPECT_LT(b.matches[0].hinge_error_m, 0.1);
-  EXPECT_TRUE(b.matches[0].state_correct);
   EXPECT_EQ(e.matched, 1);
   EXPECT_EQ(e.reported_doors, 1);
 }
@@ -1041,22 +1061,13 @@ TEST(Stations, ADoorwayRunTogetherWithItsLeafsShadowIntoARunJustTooWideIsFound) 
   // refused as too wide; the part seen through beside the shadow goes first.
   const Pipeline pipe{Parameters()};
   const Survey sv = survey(1027, 1, 33333, true);
-  const PipelineResult inside = pipe.run(sv.scans[0], false, sv.origins[0]);
-  const eval::EvalResult e = sv.score(inside);
-  SCOPED_TRACE(::testing::Message() << "seed=1027 inside:" << describe(inside));
   ASSERT_EQ(sv.truth["doors"].size(), 2u);
-  ASSERT_GE(e.matched, 1);
-  bool measured = false;
-  for (const auto& m : e.matches)
-    if (m.truth_index == 0) {
-      measured = true;
-      EXPECT_FALSE(m.angle_is_lower_bound);
-      EXPECT_LT(m.angle_error_deg, 3.0);
-      EXPECT_LT(m.hinge_error_m, 0.1);
-      EXPECT_TRUE(m.state_correct);
-    }
-  EXPECT_TRUE(measured) << "door 0 (open 112 deg) not found from inside";
-  EXPECT_TRUE(e.unmatched_report.empty());
+  const Scored inside = sv.station(pipe, 0);
+  SCOPED_TRACE(::testing::Message() << "seed=1027 inside:" << describe(inside.result));
+  const eval::DoorMatch* m = matchOf(inside, 0);
+  ASSERT_NE(m, nullptr) << "door 0 (open 112 deg) not found from inside";
+  expectMeasured(*m);
+  EXPECT_TRUE(inside.eval.unmatched_report.empty());
 }
 
 TEST(Stations, ADoorwayAtTheEndOfAWallSeenIsCutAtItsLeafsShadowInASparseScan) {
@@ -1073,16 +1084,12 @@ TEST(Stations, ADoorwayAtTheEndOfAWallSeenIsCutAtItsLeafsShadowInASparseScan) {
   const Pipeline pipe{Parameters()};
   const Survey sv = survey(4023, 1, 33333, true);
   ASSERT_EQ(sv.truth["doors"].size(), 2u);
-  const PipelineResult inside = pipe.run(sv.scans[0], false, sv.origins[0]);
-  const eval::EvalResult i = sv.score(inside);
-  SCOPED_TRACE(::testing::Message() << "seed=4023 inside:" << describe(inside) << trace(Scored{i, inside, {}}));
-  const eval::DoorMatch* m = matchOf(i, 0);
+  const Scored inside = sv.station(pipe, 0);
+  SCOPED_TRACE(::testing::Message() << "seed=4023 inside:" << describe(inside.result) << trace(inside));
+  const eval::DoorMatch* m = matchOf(inside, 0);
   ASSERT_NE(m, nullptr) << "door 0 (121 deg) not found from inside";
-  EXPECT_FALSE(m->angle_is_lower_bound);
-  EXPECT_LT(m->angle_error_deg, 5.0);
-  EXPECT_LT(m->hinge_error_m, 0.1);
-  EXPECT_TRUE(m->state_correct);
-  EXPECT_TRUE(i.unmatched_report.empty());
+  expectMeasured(*m, 5.0);
+  EXPECT_TRUE(inside.eval.unmatched_report.empty());
   const eval::EvalResult e = sv.score(pipe.runStations(sv.stations(), false));
   EXPECT_EQ(e.matched, 2);
   EXPECT_EQ(e.reported_doors, 2);
@@ -1098,11 +1105,10 @@ TEST(Stations, APartSeenThroughPastTheEndOfAWallSeenIsNoDoorway) {
   const Pipeline pipe{Parameters()};
   const Survey sv = survey(5027, 1, 133333, true);
   ASSERT_EQ(sv.scans.size(), 3u);
-  const PipelineResult beyond = pipe.run(sv.scans[2], false, sv.origins[2]);
-  const eval::EvalResult b = sv.score(beyond);
-  SCOPED_TRACE(::testing::Message() << "seed=5027 station 2:" << describe(beyond) << trace(Scored{b, beyond, {}}));
-  EXPECT_TRUE(b.unmatched_report.empty());
-  EXPECT_GE(b.matched, 1);
+  const Scored beyond = sv.station(pipe, 2);
+  SCOPED_TRACE(::testing::Message() << "seed=5027 station 2:" << describe(beyond.result) << trace(beyond));
+  EXPECT_TRUE(beyond.eval.unmatched_report.empty());
+  EXPECT_GE(beyond.eval.matched, 1);
   const eval::EvalResult e = sv.score(pipe.runStations(sv.stations(), false));
   EXPECT_EQ(e.matched, 2);
   EXPECT_EQ(e.reported_doors, 2);
@@ -1122,19 +1128,12 @@ TEST(Stations, ALeafInASparseScanIsJudgedAgainstHowDenselyItsWallIsSampled) {
   const Pipeline pipe{Parameters()};
   const Survey sv = survey(5017, 1, 25000, true);
   ASSERT_EQ(sv.truth["doors"].size(), 3u);
-  const PipelineResult inside = pipe.run(sv.scans[0], false, sv.origins[0]);
-  const eval::EvalResult i = sv.score(inside);
-  SCOPED_TRACE(::testing::Message() << "seed=5017 inside:" << describe(inside) << trace(Scored{i, inside, {}}));
-  const eval::DoorMatch* m = matchOf(i, 1);
+  const Scored inside = sv.station(pipe, 0);
+  SCOPED_TRACE(::testing::Message() << "seed=5017 inside:" << describe(inside.result) << trace(inside));
+  const eval::DoorMatch* m = matchOf(inside, 1);
   ASSERT_NE(m, nullptr) << "door 1 (33 deg) not found from inside";
-  EXPECT_FALSE(m->angle_is_lower_bound);
-  EXPECT_LT(m->angle_error_deg, 3.0);
-  EXPECT_LT(m->hinge_error_m, 0.1);
-  EXPECT_TRUE(m->state_correct);
-  const eval::EvalResult e = sv.score(pipe.runStations(sv.stations(), false));
-  EXPECT_EQ(e.matched, 3);
-  EXPECT_EQ(e.reported_doors, 3);
-  EXPECT_EQ(e.state_correct, 3);
+  expectMeasured(*m);
+  expectSurveyFindsEveryDoor(pipe, sv, 3);
 }
 
 TEST(Stations, TwoDoorsOfOneStationAreNeverJoinedByAnotherStationsReport) {

@@ -597,6 +597,28 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   // 1: trim runs across the doorway above the body; 0: the rows there show
   // wall without trim; -1: nothing is seen there (a camera's view ends lower).
   constexpr double kHeadSeenFrom = 2.25;  // m above the floor: above the highest door head with its trim
+  // The fine head cells of columns c0..c1 summed over the row of kFine fine
+  // rows from w0: face points, those standing out, columns holding face
+  // points, and (camera frames) the face points' summed offsets.
+  struct HeadRow {
+    int face = 0, out = 0, columns = 0;
+    double offset = 0;
+  };
+  auto headRow = [&](int c0, int c1, int w0) {
+    HeadRow h;
+    for (int c = c0; c <= c1; ++c) {
+      int cf = 0;
+      for (int j = w0; j < w0 + kFine; ++j) {
+        const std::size_t k = static_cast<std::size_t>(j) * cols + c;
+        cf += head_fine[k].first;
+        h.out += head_fine[k].second;
+        if (!head_fine_d.empty()) h.offset += head_fine_d[k];
+      }
+      h.face += cf;
+      h.columns += cf > 0;
+    }
+    return h;
+  };
   auto headState = [&](double a, double b) {
     const int c0 = std::max(0, static_cast<int>((a - s_lo) / cell)), c1 = std::min(cols - 1, static_cast<int>((b - s_lo) / cell));
     const int ncols = c1 - c0 + 1;
@@ -631,18 +653,8 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       for (int k = 0; k < kFine; ++k) {
         const int w0 = (r - body1) * kFine + k;  // first fine row of the (slid) row
         if (w0 + kFine > fine_n) break;
-        int f = 0, o = 0, cov = 0;
-        for (int c = c0; c <= c1; ++c) {
-          int cf = 0;
-          for (int j = w0; j < w0 + kFine; ++j) {
-            const auto& h = head_fine[static_cast<std::size_t>(j) * cols + c];
-            cf += h.first;
-            o += h.second;
-          }
-          f += cf;
-          cov += cf > 0;
-        }
-        if (f >= 5 && o >= 0.7 * f && cov >= share * ncols) return 1;
+        const HeadRow h = headRow(c0, c1, w0);
+        if (h.face >= 5 && h.out >= 0.7 * h.face && h.columns >= share * ncols) return 1;
       }
     }
     return seen ? 0 : -1;
@@ -888,36 +900,19 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       std::vector<double> diffs;  // per slid row: the doorway's mean offset less its sides'
       double peak = -std::numeric_limits<double>::infinity();
       for (int w0 = 0; w0 + kFine <= fine_n; ++w0) {
-        int f = 0, cov = 0;
-        double sd = 0;
-        for (int c = c0; c <= c1; ++c) {
-          int cf = 0;
-          for (int j = w0; j < w0 + kFine; ++j) {
-            const std::size_t k = static_cast<std::size_t>(j) * cols + c;
-            cf += head_fine[k].first;
-            sd += head_fine_d[k];
-          }
-          f += cf;
-          cov += cf > 0;
-        }
-        if (f < kHeadMeanMinPoints || cov < 0.6 * ncols) continue;
+        const HeadRow h = headRow(c0, c1, w0);
+        if (h.face < kHeadMeanMinPoints || h.columns < 0.6 * ncols) continue;
         double ref = 0;
         int sides = 0;
         for (int side = 0; side < 2; ++side) {
           const double lo = side == 0 ? a - 0.30 : b + 0.12, hi = side == 0 ? a - 0.12 : b + 0.30;
           const int k0 = std::max(0, static_cast<int>(std::ceil((lo - s_lo) / cell)));
           const int k1 = std::min(cols - 1, static_cast<int>(std::floor((hi - s_lo) / cell)) - 1);
-          int n = 0;
-          double sum = 0;
-          for (int c = k0; c <= k1; ++c)
-            for (int j = w0; j < w0 + kFine; ++j) {
-              n += head_fine[static_cast<std::size_t>(j) * cols + c].first;
-              sum += head_fine_d[static_cast<std::size_t>(j) * cols + c];
-            }
-          if (n >= kHeadMeanMinPoints / 2) ref += sum / n, ++sides;
+          const HeadRow sd = headRow(k0, k1, w0);
+          if (sd.face >= kHeadMeanMinPoints / 2) ref += sd.offset / sd.face, ++sides;
         }
         if (sides < 2) continue;
-        diffs.push_back(sd / f - ref / 2);
+        diffs.push_back(h.offset / h.face - ref / 2);
         peak = std::max(peak, diffs.back());
       }
       if (diffs.size() < 3) return false;
