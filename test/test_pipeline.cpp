@@ -657,6 +657,26 @@ TEST(DoorState, ClosedDoorsAFewMetresOffAreToldByTheMeanOffsetOfTheirHeadTrim) {
   }
 }
 
+TEST(DoorState, ALeafSetBackThatPullsTheWallsPlaneIsToldAgainstTheFaceBesideIt) {
+  // Camera frame 5008: a closed door 2.2 m off, its leaf 7 cm behind the
+  // wall's face, filling a third of the wall in view. The plane fitted to
+  // the wall lies between the two: the leaf's points 2 cm behind it, the
+  // face's 2 cm before it, both within the face tolerance there (4-5 cm), so
+  // the doorway showed neither as an opening nor as a leaf 2.5 cm behind the
+  // plane. Against the face (the median of the sub-columns' mean offsets)
+  // and against its own sides 12-30 cm beyond its edges, the leaf's run
+  // stands 3.7 cm back: the door is found, closed, as wide as it is.
+  const std::uint64_t seed = 5008;
+  const Scored s = runScene(sim::randomRoom(seed), seed, "rgbd");
+  SCOPED_TRACE(::testing::Message() << "seed=" << seed << " " << describe(s) << trace(s));
+  const eval::DoorMatch* m = expectFoundAlone(s, 0);
+  ASSERT_NE(m, nullptr);
+  EXPECT_LT(m->angle_error_deg, 3.0);
+  ASSERT_EQ(s.result.doors.size(), 1u);
+  EXPECT_EQ(s.result.doors[0].state, DoorStateKind::Closed);
+  EXPECT_NEAR(s.result.doors[0].width, s.truth["doors"][0]["width"].get<double>(), 0.05);
+}
+
 TEST(DoorState, ACameraLookingThroughADoorwayIntoNothingInRangeSeesItOpen) {
   // Camera frames (the sweep's seeds) of a doorway whose room beyond is out
   // of range: its body returns nothing over more than 0.6 m, which left its

@@ -878,6 +878,49 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     addCandidate(subS(c), subS(e + 1), false);
     c = e + 1;
   }
+  // (4b) The same in a camera frame, where a leaf filling much of the wall
+  // seen pulls the fitted plane towards itself: a leaf 7 cm behind the face
+  // 2.2 m off lies 2 cm behind the plane and the face 2 cm before it (rgbd
+  // 5008). Runs kSetBack or more behind the median of the sub-columns'
+  // means (the face, where the wall shows more than the leaf), each judged
+  // against its own sides: the mean of the sub-columns 12-30 cm beyond each
+  // edge stands kSetBack or more before the run's mean (a plane turned a
+  // little about the vertical tilts the sides alike). Only where no other
+  // candidate lies.
+  if (view) {
+    auto meanAt = [&](int k) { return face_d_sum[k] / face_d_n[k]; };
+    std::vector<double> means;
+    for (int k = 0; k < sub; ++k)
+      if (face_d_n[k] >= 10) means.push_back(meanAt(k));
+    if (means.size() >= 10) {
+      std::nth_element(means.begin(), means.begin() + means.size() / 2, means.end());
+      const double face_level = means[means.size() / 2];
+      auto behind = [&](int k) { return face_d_n[k] >= 10 && meanAt(k) <= face_level - kSetBack; };
+      // The mean over sub-columns [k0, k1] holding 10 points or more; NaN with fewer than 3 of them.
+      auto meanOver = [&](int k0, int k1) {
+        double sum = 0;
+        int n = 0;
+        for (int k = std::max(0, k0); k <= std::min(sub - 1, k1); ++k)
+          if (face_d_n[k] >= 10) sum += meanAt(k), ++n;
+        return n >= 3 ? sum / n : std::numeric_limits<double>::quiet_NaN();
+      };
+      const int near = static_cast<int>(std::lround(0.12 / half)), far = static_cast<int>(std::lround(0.30 / half));
+      for (int c = 0; c < sub;) {
+        if (!behind(c)) {
+          ++c;
+          continue;
+        }
+        int e = c;
+        while (e + 1 < sub && behind(e + 1)) ++e;
+        const double a = subS(c), b = subS(e + 1);
+        const double run = meanOver(c, e), left = meanOver(c - far, c - near), right = meanOver(e + near, e + far);
+        if (left - run >= kSetBack && right - run >= kSetBack &&
+            std::none_of(out.begin(), out.end(), [&](const Doorway& d) { return a < d.s1 && d.s0 < b; }))
+          addCandidate(a, b, false);
+        c = e + 1;
+      }
+    }
+  }
 
   // (5) In a camera frame, trim legs paired under a head that stands out
   // only in the mean: depth noise of 1-3 cm (a closed door 3-3.6 m off)
