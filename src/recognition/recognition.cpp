@@ -919,6 +919,18 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
           addCandidate(a, b, false);
         c = e + 1;
       }
+      // A candidate narrower than a door whose set-back run goes on beside
+      // it (a leaf ajar in a recess: its hinge end within the face
+      // tolerance, set back in the mean only, its latch end beyond the
+      // tolerance, rgbd 3027) is widened over that run, when that makes it a door wide.
+      for (Doorway& d : out) {
+        if (d.paired || d.s1 - d.s0 >= p.door_min_width) continue;
+        int a = static_cast<int>(std::floor((d.s0 - s_lo) / half)), b = static_cast<int>(std::ceil((d.s1 - s_lo) / half)) - 1;
+        while (a - 1 >= 0 && behind(a - 1)) --a;
+        while (b + 1 < sub && behind(b + 1)) ++b;
+        const double s0 = std::min(d.s0, subS(a)), s1 = std::max(d.s1, subS(b + 1));
+        if (s1 - s0 >= p.door_min_width && s1 - s0 <= p.door_max_width) d.s0 = s0, d.s1 = s1;
+      }
     }
   }
 
