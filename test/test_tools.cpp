@@ -15,6 +15,8 @@
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
+#include <tuple>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -131,13 +133,28 @@ TEST(Tools, SimulatorWritesCloudTruthAndBagDeterministically) {
   const nlohmann::json truth = nlohmann::json::parse(slurp(dir / "a.json"));
   EXPECT_EQ(truth["sensor"], "tls");
   EXPECT_GE(truth["doors"].size(), 1u);
-  // The truth scored against itself as a report is perfect.
-  const Result eval = run("door_state_eval " + (dir / "a.json").string() + " " + (dir / "a.json").string());
-  ASSERT_EQ(eval.code, 0);
-  const nlohmann::json score = nlohmann::json::parse(eval.out);
-  EXPECT_DOUBLE_EQ(score["precision"].get<double>(), 1.0);
-  EXPECT_DOUBLE_EQ(score["recall"].get<double>(), 1.0);
-  EXPECT_DOUBLE_EQ(score["state_accuracy"].get<double>(), 1.0);
+  fs::remove_all(dir);
+}
+
+// door_state_eval TRUTH REPORT scores; the arguments swapped, or the same
+// document given for both, are refused (exit 2, one line saying so), not
+// scored (it gave precision 0.5, or a perfect score for a report against itself).
+TEST(Tools, EvalRefusesSwappedOrWrongDocuments) {
+  const fs::path dir = tempDir("eval_swap");
+  const std::string truth = (dir / "s.json").string(), report = (dir / "r.json").string();
+  ASSERT_EQ(run("door_scene_sim --quiet --seed 5 --points 100000 --out " + (dir / "s").string()).code, 0);
+  ASSERT_EQ(run("door_state_cli --quiet --json " + report + " " + (dir / "s.pcd").string()).code, 0);
+  const Result ok = run("door_state_eval " + truth + " " + report);
+  ASSERT_EQ(ok.code, 0);
+  EXPECT_TRUE(nlohmann::json::parse(ok.out).contains("precision"));
+  for (const auto& [a, b, needle] : std::vector<std::tuple<std::string, std::string, std::string>>{
+           {report, truth, "swapped"}, {report, report, "not simulator ground truth"}, {truth, truth, "not a report"}}) {
+    SCOPED_TRACE(a + " " + b);
+    const Result r = run("door_state_eval " + a + " " + b, true);
+    EXPECT_EQ(r.code, 2);
+    EXPECT_NE(r.out.find(needle), std::string::npos) << r.out;
+    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
+  }
   fs::remove_all(dir);
 }
 
