@@ -236,3 +236,36 @@ TEST(Tools, CliTakesTheStationsOfASurveyEachFromItsViewpoint) {
   EXPECT_NE(bad.out.find("VIEWPOINT"), std::string::npos) << bad.out;
   fs::remove_all(dir);
 }
+
+// max_points from --config bounds what the reader accepts: a header asking
+// more is refused unread, the message naming max_points (the reader kept its
+// own 50M limit, and its message named no parameter). 5e8, the range's top
+// as default.yaml writes it, is taken as an integer.
+TEST(Tools, CliAppliesMaxPointsFromItsConfigToReading) {
+  const fs::path dir = tempDir("cli_max_points");
+  auto lying = [&](const std::string& name, long points) {
+    std::ofstream(dir / name, std::ios::binary)
+        << "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH " << points
+        << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << points << "\nDATA binary\n"
+        << std::string(120, '\0');
+  };
+  lying("2000.pcd", 2000);
+  lying("60M.pcd", 60000000);
+  std::ofstream(dir / "small.yaml") << "max_points: 1000\n";
+  std::ofstream(dir / "top.yaml") << "max_points: 5e8\n";
+  const Result small = run("door_state_cli --config " + (dir / "small.yaml").string() + " " + (dir / "2000.pcd").string(), true);
+  EXPECT_EQ(small.code, 2);
+  EXPECT_NE(small.out.find("asks for 2000 points"), std::string::npos) << small.out;
+  EXPECT_NE(small.out.find("1000 (parameter max_points)"), std::string::npos) << small.out;
+  const Result dflt = run("door_state_cli " + (dir / "60M.pcd").string(), true);
+  EXPECT_EQ(dflt.code, 2);
+  EXPECT_NE(dflt.out.find("50000000 (parameter max_points)"), std::string::npos) << dflt.out;
+  // Raised to 5e8 the header's 60M is not refused for its count: the file is
+  // refused for holding less than it promises.
+  const Result top = run("door_state_cli --config " + (dir / "top.yaml").string() + " " + (dir / "60M.pcd").string(), true);
+  EXPECT_EQ(top.code, 2);
+  EXPECT_EQ(top.out.find("(parameter max_points)"), std::string::npos) << top.out;
+  EXPECT_NE(top.out.find("header promises 60000000 points"), std::string::npos) << top.out;
+  EXPECT_EQ(std::count(top.out.begin(), top.out.end(), '\n'), 1) << top.out;
+  fs::remove_all(dir);
+}

@@ -82,6 +82,8 @@ int main(int argc, char** argv) {
     dsr::Parameters params = config.empty() ? dsr::Parameters() : dsr::loadParameters(config);
     if (!up.empty()) params.up_axis = up;
     const dsr::Pipeline pipeline(params);  // validates
+    // The configured limit applies to reading too: a header asking more is refused unread.
+    dsr::io::setMaxPoints(static_cast<std::size_t>(params.max_points));
     const auto t0 = std::chrono::steady_clock::now();
     // Every input read before anything is said: a bad one is one line on stderr.
     std::vector<pcl::PointCloud<pcl::PointXYZ>> clouds;
