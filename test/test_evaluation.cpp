@@ -341,3 +341,29 @@ TEST(Evaluation, AnglesGivenAsLowerBoundsCountInTheMaeButNotTheMeasuredMae) {
   // Without the field every angle counts as measured.
   EXPECT_NEAR(single(vec(0, 0, 0)).angleMaeMeasuredDeg(), 0.0, 1e-12);
 }
+
+// Truth must be simulator ground truth ("scene") and the report a pipeline
+// report ("points_in"): swapped or twice the same document is refused rather
+// than scored (a report scored as truth gave a score, e.g. precision 0.5).
+TEST(Evaluation, SwappedOrWrongDocumentsAreRefused) {
+  const json t = truthDoc({truthDoor(vec(0, 0, 0), vec(0, 0, 0), 0, "closed")});
+  const json r = reportDoc({reportDoor(0, vec(0, 0, 0), vec(0, 0, 0), 0, "closed")});
+  ASSERT_NO_THROW(evaluate(t, r));
+  auto message = [](const json& a, const json& b) -> std::string {
+    try {
+      evaluate(a, b);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "no exception";
+  };
+  EXPECT_EQ(message(r, t).rfind("truth: ", 0), 0u) << message(r, t);
+  EXPECT_NE(message(r, t).find("arguments swapped?"), std::string::npos) << message(r, t);
+  EXPECT_NE(message(r, r).find("a report, not simulator ground truth"), std::string::npos) << message(r, r);
+  EXPECT_NE(message(t, t).find("report: has \"scene\""), std::string::npos) << message(t, t);
+  json bare_t = t, bare_r = r;
+  bare_t.erase("scene");
+  bare_r.erase("points_in");
+  EXPECT_NE(message(bare_t, r).find("truth: missing field \"scene\""), std::string::npos) << message(bare_t, r);
+  EXPECT_NE(message(t, bare_r).find("report: missing field \"points_in\""), std::string::npos) << message(t, bare_r);
+}

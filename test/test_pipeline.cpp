@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
+#include <regex>
 #include <sstream>
 
 #include <sys/resource.h>
@@ -1339,6 +1341,100 @@ TEST(Parameters, AbsurdValuesAreRefusedWithTheirName) {
   p.closed_below_deg = 50;
   p.open_from_deg = 40;
   EXPECT_THROW(Pipeline{p}, std::invalid_argument);
+}
+
+// An integer parameter takes an integral number however it is written (5e8,
+// 16.0: what a range in config/default.yaml looks like), not 1.5; random_seed
+// and min_region_points are held to the .cfg's ranges ([0, 1e6], [3, 1e6]).
+namespace {
+Parameters parseYaml(const std::string& text) { return parseParameters(text, Parameters(), "test"); }
+}  // namespace
+
+TEST(Parameters, IntegersWrittenAsIntegralDoublesAreTakenAndRangesMatchTheCfg) {
+  const Parameters big = parseYaml("max_points: 5e8\nnormal_k: 16.0\nmin_region_points: 1e6\n");
+  EXPECT_EQ(big.max_points, 500000000);
+  EXPECT_EQ(big.normal_k, 16);
+  EXPECT_EQ(big.min_region_points, 1000000);
+  for (const auto& [text, name] : std::vector<std::pair<std::string, std::string>>{
+           {"normal_k: 16.5\n", "normal_k"},
+           {"max_points: 1e30\n", "max_points"},
+           {"max_points: .inf\n", "max_points"},
+           {"random_seed: -5\n", "random_seed"},
+           {"random_seed: 1000001\n", "random_seed"},
+           {"min_region_points: 1000001\n", "min_region_points"}}) {
+    try {
+      parseYaml(text);
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(parseYaml("random_seed: 0\n").random_seed, 0);
+  EXPECT_EQ(parseYaml("random_seed: 1000000\n").random_seed, 1000000);
+}
+
+// Every parameter's line in config/default.yaml gives a range "[lo, hi]"
+// (up_axis aside); its numeric ends load as written and are the .cfg's
+// min and max; a bound that is not a number names another parameter.
+TEST(Parameters, DefaultYamlRangesParseAndAgreeWithTheCfg) {
+  std::map<std::string, std::pair<std::string, std::string>> yaml_range;
+  {
+    std::ifstream in(DSR_CONFIG_DIR "/default.yaml");
+    ASSERT_TRUE(in.good());
+    const std::regex line(R"(^(\w+):\s*\S+\s*#\s*(.*)$)"), range(R"(\[([^,\]]+),\s*([^\]]+)\])");
+    std::string l;
+    while (std::getline(in, l)) {
+      std::smatch m, r;
+      if (!std::regex_match(l, m, line)) continue;
+      const std::string comment = m[2];
+      if (std::regex_search(comment, r, range)) yaml_range[m[1]] = {r[1], r[2]};
+      else yaml_range[m[1]] = {"", ""};
+    }
+  }
+  std::map<std::string, std::pair<double, double>> cfg_range;
+  {
+    std::ifstream in(DSR_CONFIG_DIR "/../cfg/DoorState.cfg");
+    ASSERT_TRUE(in.good());
+    const std::regex add(R"re(^gen\.add\("(\w+)",\s*(int_t|double_t),.*,\s*([^,]+),\s*([^,]+),\s*([^,)]+)\)\s*$)re");
+    std::string l;
+    while (std::getline(in, l)) {
+      std::smatch m;
+      if (std::regex_match(l, m, add)) cfg_range[m[1]] = {std::stod(m[4]), std::stod(m[5])};
+    }
+  }
+  auto number = [](const std::string& t, double* v) {
+    std::size_t n = 0;
+    try {
+      *v = std::stod(t, &n);
+    } catch (...) {
+      return false;
+    }
+    return n == t.size();
+  };
+  // A range's end that only holds with its partner moved (door_min_width 5
+  // needs door_max_width >= 5).
+  const std::map<std::string, std::string> with = {{"door_min_width", "door_max_width: 10\n"}};
+  for (const std::string& name : parameterNames()) {
+    if (name == "up_axis") continue;
+    SCOPED_TRACE(name);
+    ASSERT_TRUE(yaml_range.count(name)) << "no line in default.yaml";
+    const auto [lo, hi] = yaml_range[name];
+    ASSERT_FALSE(lo.empty()) << "no [lo, hi] range in its comment";
+    ASSERT_TRUE(cfg_range.count(name)) << "not in the .cfg";
+    const double cfg_ends[2] = {cfg_range[name].first, cfg_range[name].second};
+    const std::string ends[2] = {lo, hi};
+    for (int e = 0; e < 2; ++e) {
+      double v = 0;
+      if (!number(ends[e], &v)) {
+        EXPECT_TRUE(ends[e] == "min" || ends[e] == "closed_below") << "bound '" << ends[e] << "'";
+        continue;
+      }
+      // voxel_size: "0 or [0.001, 1]": the .cfg's min is the 0.
+      if (!(name == "voxel_size" && e == 0)) EXPECT_DOUBLE_EQ(v, cfg_ends[e]) << "yaml " << ends[e];
+      const std::string extra = with.count(name) ? with.at(name) : "";
+      EXPECT_NO_THROW(parseYaml(extra + name + ": " + ends[e] + "\n")) << name << ": " << ends[e];
+    }
+  }
 }
 
 // ------------------------------------------------------------------ real data

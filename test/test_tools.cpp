@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <pcl/io/ply_io.h>
+#include <pcl/point_types.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <sensor_msgs/PointCloud2.h>
@@ -15,6 +17,8 @@
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
+#include <tuple>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -131,13 +135,28 @@ TEST(Tools, SimulatorWritesCloudTruthAndBagDeterministically) {
   const nlohmann::json truth = nlohmann::json::parse(slurp(dir / "a.json"));
   EXPECT_EQ(truth["sensor"], "tls");
   EXPECT_GE(truth["doors"].size(), 1u);
-  // The truth scored against itself as a report is perfect.
-  const Result eval = run("door_state_eval " + (dir / "a.json").string() + " " + (dir / "a.json").string());
-  ASSERT_EQ(eval.code, 0);
-  const nlohmann::json score = nlohmann::json::parse(eval.out);
-  EXPECT_DOUBLE_EQ(score["precision"].get<double>(), 1.0);
-  EXPECT_DOUBLE_EQ(score["recall"].get<double>(), 1.0);
-  EXPECT_DOUBLE_EQ(score["state_accuracy"].get<double>(), 1.0);
+  fs::remove_all(dir);
+}
+
+// door_state_eval TRUTH REPORT scores; the arguments swapped, or the same
+// document given for both, are refused (exit 2, one line saying so), not
+// scored (it gave precision 0.5, or a perfect score for a report against itself).
+TEST(Tools, EvalRefusesSwappedOrWrongDocuments) {
+  const fs::path dir = tempDir("eval_swap");
+  const std::string truth = (dir / "s.json").string(), report = (dir / "r.json").string();
+  ASSERT_EQ(run("door_scene_sim --quiet --seed 5 --points 100000 --out " + (dir / "s").string()).code, 0);
+  ASSERT_EQ(run("door_state_cli --quiet --json " + report + " " + (dir / "s.pcd").string()).code, 0);
+  const Result ok = run("door_state_eval " + truth + " " + report);
+  ASSERT_EQ(ok.code, 0);
+  EXPECT_TRUE(nlohmann::json::parse(ok.out).contains("precision"));
+  for (const auto& [a, b, needle] : std::vector<std::tuple<std::string, std::string, std::string>>{
+           {report, truth, "swapped"}, {report, report, "not simulator ground truth"}, {truth, truth, "not a report"}}) {
+    SCOPED_TRACE(a + " " + b);
+    const Result r = run("door_state_eval " + a + " " + b, true);
+    EXPECT_EQ(r.code, 2);
+    EXPECT_NE(r.out.find(needle), std::string::npos) << r.out;
+    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
+  }
   fs::remove_all(dir);
 }
 
@@ -217,5 +236,100 @@ TEST(Tools, CliTakesTheStationsOfASurveyEachFromItsViewpoint) {
   const Result bad = run("door_state_cli " + s0 + " " + (dir / "far.pcd").string(), true);
   EXPECT_EQ(bad.code, 2);
   EXPECT_NE(bad.out.find("VIEWPOINT"), std::string::npos) << bad.out;
+  fs::remove_all(dir);
+}
+
+// max_points from --config bounds what the reader accepts: a header asking
+// more is refused unread, the message naming max_points (the reader kept its
+// own 50M limit, and its message named no parameter). 5e8, the range's top
+// as default.yaml writes it, is taken as an integer.
+TEST(Tools, CliAppliesMaxPointsFromItsConfigToReading) {
+  const fs::path dir = tempDir("cli_max_points");
+  auto lying = [&](const std::string& name, long points) {
+    std::ofstream(dir / name, std::ios::binary)
+        << "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH " << points
+        << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << points << "\nDATA binary\n"
+        << std::string(120, '\0');
+  };
+  lying("2000.pcd", 2000);
+  lying("60M.pcd", 60000000);
+  std::ofstream(dir / "small.yaml") << "max_points: 1000\n";
+  std::ofstream(dir / "top.yaml") << "max_points: 5e8\n";
+  const Result small = run("door_state_cli --config " + (dir / "small.yaml").string() + " " + (dir / "2000.pcd").string(), true);
+  EXPECT_EQ(small.code, 2);
+  EXPECT_NE(small.out.find("asks for 2000 points"), std::string::npos) << small.out;
+  EXPECT_NE(small.out.find("1000 (parameter max_points)"), std::string::npos) << small.out;
+  const Result dflt = run("door_state_cli " + (dir / "60M.pcd").string(), true);
+  EXPECT_EQ(dflt.code, 2);
+  EXPECT_NE(dflt.out.find("50000000 (parameter max_points)"), std::string::npos) << dflt.out;
+  // Raised to 5e8 the header's 60M is not refused for its count: the file is
+  // refused for holding less than it promises.
+  const Result top = run("door_state_cli --config " + (dir / "top.yaml").string() + " " + (dir / "60M.pcd").string(), true);
+  EXPECT_EQ(top.code, 2);
+  EXPECT_EQ(top.out.find("(parameter max_points)"), std::string::npos) << top.out;
+  EXPECT_NE(top.out.find("header promises 60000000 points"), std::string::npos) << top.out;
+  EXPECT_EQ(std::count(top.out.begin(), top.out.end(), '\n'), 1) << top.out;
+  fs::remove_all(dir);
+}
+
+// Outputs are checked before any input is read: an unwritable --json or
+// --reconstruction is exit 2 naming the flag and the system's reason, with no
+// report (it was exit 1 after the pipeline, with the report already on
+// stdout for --reconstruction); an output file created for a run that fails
+// is removed again; '-' as INPUT is refused as a bad argument.
+TEST(Tools, CliOpensItsOutputsBeforeReadingAndRefusesStdin) {
+  const fs::path dir = tempDir("cli_out");
+  ASSERT_EQ(run("door_scene_sim --quiet --seed 3 --points 50000 --out " + (dir / "ok").string()).code, 0);
+  const std::string ok = (dir / "ok.pcd").string();
+  std::ofstream(dir / "text.pcd") << "this is not a point cloud\n";
+  for (const std::string flag : {"--json", "--reconstruction"}) {
+    SCOPED_TRACE(flag);
+    const std::string cmd = "door_state_cli --quiet " + flag + " /nonexistent/dir/out ";
+    const Result err = run(cmd + ok, true), out = run(cmd + ok);
+    EXPECT_EQ(err.code, 2);
+    EXPECT_NE(err.out.find(flag + " /nonexistent/dir/out: cannot write: No such file or directory"), std::string::npos)
+        << err.out;
+    EXPECT_EQ(std::count(err.out.begin(), err.out.end(), '\n'), 1) << err.out;
+    EXPECT_TRUE(out.out.empty()) << "a report was written";
+    // Before the input is read: a bad input is not what is reported.
+    const Result first = run(cmd + (dir / "text.pcd").string(), true);
+    EXPECT_EQ(first.code, 2);
+    EXPECT_NE(first.out.find(flag), std::string::npos) << first.out;
+  }
+  const Result failed = run("door_state_cli --json " + (dir / "new.json").string() + " --reconstruction " +
+                            (dir / "new.ply").string() + " " + (dir / "text.pcd").string());
+  EXPECT_EQ(failed.code, 2);
+  EXPECT_FALSE(fs::exists(dir / "new.json"));
+  EXPECT_FALSE(fs::exists(dir / "new.ply"));
+  const Result dash = run("door_state_cli -", true);
+  EXPECT_EQ(dash.code, 2);
+  EXPECT_NE(dash.out.find("stdin"), std::string::npos) << dash.out;
+  fs::remove_all(dir);
+}
+
+// A cloud without walls still gets a report (exit 0) and --reconstruction a
+// valid PLY of 0 points in place of whatever the path held before (the old
+// file was left there).
+TEST(Tools, CliWritesAnEmptyReconstructionWhenNoWallIsFound) {
+  const fs::path dir = tempDir("cli_no_wall");
+  {
+    std::ofstream f(dir / "floor.pcd");
+    f << "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2500\nHEIGHT 1\n"
+         "VIEWPOINT 0 0 1.5 1 0 0 0\nPOINTS 2500\nDATA ascii\n";
+    for (int i = 0; i < 50; ++i)
+      for (int j = 0; j < 50; ++j) f << 0.04 * i - 1 << " " << 0.04 * j - 1 << " 0\n";
+  }
+  std::ofstream(dir / "rec.ply") << "an old reconstruction\n";
+  const Result r = run("door_state_cli --quiet --json " + (dir / "r.json").string() + " --reconstruction " +
+                       (dir / "rec.ply").string() + " " + (dir / "floor.pcd").string());
+  ASSERT_EQ(r.code, 0);
+  EXPECT_TRUE(nlohmann::json::parse(slurp(dir / "r.json"))["walls"].empty());
+  const std::string ply = slurp(dir / "rec.ply");
+  EXPECT_EQ(ply.rfind("ply\n", 0), 0u) << ply;
+  EXPECT_NE(ply.find("element vertex 0\n"), std::string::npos) << ply;
+  EXPECT_EQ(ply.find("old"), std::string::npos) << ply;
+  pcl::PointCloud<pcl::PointXYZL> back;
+  EXPECT_EQ(pcl::io::loadPLYFile((dir / "rec.ply").string(), back), 0);
+  EXPECT_TRUE(back.empty());
   fs::remove_all(dir);
 }

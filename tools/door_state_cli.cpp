@@ -2,7 +2,13 @@
 // writes the report JSON.
 #include <pcl/io/ply_io.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <chrono>
+#include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <iostream>
 #include <string>
@@ -38,16 +44,68 @@ joined by commas.
   --up AXIS                the cloud's up axis, or auto to estimate it (default +z;
                            -y for a camera optical frame)
   --json OUT.json          write the report there instead of stdout
-  --reconstruction OUT.ply walls rebuilt with their doorways and leaves (label 1 wall, 2 leaf)
+  --reconstruction OUT.ply walls rebuilt with their doorways and leaves (label 1 wall, 2 leaf);
+                           with no wall found, a valid PLY of 0 points
   --quiet                  no progress or timings on stderr
   --verbose                also every wall and doorway candidate with the decision on it
   -h, --help               this text
 
-exit status: 0 report written (zero doors included), 2 bad arguments or an
-unreadable or malformed input, 1 anything else.
+Both outputs are opened before any INPUT is read: one that cannot be written
+is refused at once. INPUT must be a file ('-', stdin, is refused).
+
+exit status: 0 report written (zero doors included; the reconstruction, if
+asked, is written before it); 2 bad arguments (the message and this usage on
+stderr), or an output that cannot be opened, or an unreadable or malformed
+input (one line on stderr); 1 anything else (no report written).
 )";
 
 using dsr::tools::UsageError;
+
+// An output file that cannot be opened for writing: exit 2, before any input is read.
+struct OutputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// An output path checked before the pipeline runs: opened for writing
+// (created if missing, not truncated, so a refused run leaves an existing file
+// as it was); a file this run created is removed again if no report is written.
+struct Output {
+  std::string path;
+  bool created = false;
+  bool done = false;
+  Output(const std::string& flag, const std::string& p) : path(p) {
+    if (p.empty()) return;
+    const int fd = ::open(p.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (fd >= 0) {
+      created = true;
+    } else if (errno == EEXIST) {
+      const int fd2 = ::open(p.c_str(), O_WRONLY | O_CLOEXEC);
+      if (fd2 < 0) throw OutputError(flag + " " + p + ": cannot write: " + std::strerror(errno));
+      ::close(fd2);
+      return;
+    } else {
+      throw OutputError(flag + " " + p + ": cannot write: " + std::strerror(errno));
+    }
+    ::close(fd);
+  }
+  ~Output() {
+    if (created && !done) std::remove(path.c_str());
+  }
+};
+
+// The reconstruction, or with nothing reconstructed a valid PLY of 0 points
+// (PCL refuses to write an empty cloud) so no earlier file is left behind.
+void writeReconstruction(const std::string& path, const pcl::PointCloud<pcl::PointXYZL>& cloud) {
+  if (!cloud.empty()) {
+    if (pcl::io::savePLYFileBinary(path, cloud) != 0) throw std::runtime_error("cannot write " + path);
+    return;
+  }
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << "ply\nformat binary_little_endian 1.0\ncomment door_state_cli: no wall found, nothing reconstructed\n"
+         "element vertex 0\nproperty float x\nproperty float y\nproperty float z\nproperty uint label\nend_header\n";
+  out.close();
+  if (!out) throw std::runtime_error("cannot write " + path + ": " + std::strerror(errno));
+}
 
 }  // namespace
 
@@ -69,7 +127,8 @@ int main(int argc, char** argv) {
       else if (a == "--reconstruction") recon_out = value();
       else if (a == "--quiet") quiet = true;
       else if (a == "--verbose") verbose = true;
-      else if (!a.empty() && a[0] == '-' && a != "-") throw UsageError("unknown option '" + a + "'");
+      else if (a == "-") throw UsageError("INPUT '-': reading a cloud from stdin is not supported; give a file");
+      else if (!a.empty() && a[0] == '-') throw UsageError("unknown option '" + a + "'");
       else inputs.push_back(a);
     }
     if (inputs.empty()) throw UsageError("INPUT is missing");
@@ -82,6 +141,10 @@ int main(int argc, char** argv) {
     dsr::Parameters params = config.empty() ? dsr::Parameters() : dsr::loadParameters(config);
     if (!up.empty()) params.up_axis = up;
     const dsr::Pipeline pipeline(params);  // validates
+    // The configured limit applies to reading too: a header asking more is refused unread.
+    dsr::io::setMaxPoints(static_cast<std::size_t>(params.max_points));
+    // Both outputs opened before anything is read: a bad path costs no pipeline run.
+    Output json_file("--json", json_out), recon_file("--reconstruction", recon_out);
     const auto t0 = std::chrono::steady_clock::now();
     // Every input read before anything is said: a bad one is one line on stderr.
     std::vector<pcl::PointCloud<pcl::PointXYZ>> clouds;
@@ -118,19 +181,21 @@ int main(int argc, char** argv) {
     const dsr::PipelineResult result = pipeline.runStations(stations, !recon_out.empty());
     nlohmann::json report = dsr::io::reportJson(result, input);
     report["timing_ms"]["read"] = read_ms;
+    // The reconstruction before the report: exit 0 always means both were written.
+    if (!recon_out.empty()) {
+      if (result.reconstruction.empty() && !quiet)
+        std::cerr << "door_state_cli: no wall to reconstruct, " << recon_out << " holds 0 points\n";
+      writeReconstruction(recon_out, result.reconstruction);
+      recon_file.done = true;
+    }
     if (json_out.empty()) {
       std::cout << report.dump(2) << "\n";
     } else {
-      std::ofstream out(json_out);
+      std::ofstream out(json_out, std::ios::trunc);
       out << report.dump(2) << "\n";
-      if (!out) throw std::runtime_error("cannot write " + json_out);
-    }
-    if (!recon_out.empty()) {
-      if (result.reconstruction.empty()) {
-        if (!quiet) std::cerr << "door_state_cli: no wall to reconstruct, " << recon_out << " not written\n";
-      } else if (pcl::io::savePLYFileBinary(recon_out, result.reconstruction) != 0) {
-        throw std::runtime_error("cannot write " + recon_out);
-      }
+      out.close();
+      if (!out) throw std::runtime_error("cannot write " + json_out + ": " + std::strerror(errno));
+      json_file.done = true;
     }
     if (!quiet) {
       for (const auto& w : result.warnings) std::cerr << "door_state_cli: warning: " << w << "\n";
@@ -143,6 +208,9 @@ int main(int argc, char** argv) {
       for (const auto& kv : result.timing_ms) std::cerr << " " << kv.first << " " << static_cast<int>(kv.second + 0.5);
       std::cerr << "\n";
     }
+  } catch (const OutputError& e) {
+    std::cerr << "door_state_cli: " << e.what() << "\n";
+    return 2;
   } catch (const dsr::io::CloudReadError& e) {
     std::cerr << "door_state_cli: " << e.what() << "\n";
     return 2;

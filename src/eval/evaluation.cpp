@@ -124,6 +124,17 @@ EvalResult evaluate(const json& truth, const json& report, double max_center_dis
     throw std::invalid_argument("max_center_distance_m must be a finite number >= 0");
   if (!truth.is_object()) fail("truth", "expected a JSON object");
   if (!report.is_object()) fail("report", "expected a JSON object");
+  // Each document must be what it claims: simulator truth has "scene" (a
+  // report never does), a report "points_in" (truth never does). Without
+  // this a report scored as truth, or truth as a report, gives a score.
+  if (!truth.contains("scene"))
+    fail("truth", truth.contains("points_in")
+                      ? "has \"points_in\" and no \"scene\": a report, not simulator ground truth (arguments swapped?)"
+                      : "missing field \"scene\": not simulator ground truth");
+  if (!report.contains("points_in"))
+    fail("report", report.contains("scene")
+                       ? "has \"scene\" and no \"points_in\": simulator ground truth, not a report (arguments swapped?)"
+                       : "missing field \"points_in\": not a door_state_cli report");
   const Eigen::Vector3d up = parseUp(truth);
   std::vector<Door> t = parseDoors(truth, "truth");
   const std::vector<Door> r = parseDoors(report, "report");

@@ -220,7 +220,7 @@ void allocate(pcl::PointCloud<pcl::PointXYZ>& cloud, u64 points, u64 width, u64 
 void checkPointLimit(Input& in, u64 points) {
   if (points > g_max_points.load())
     in.fail("header asks for " + std::to_string(points) + " points, more than the limit of " +
-            std::to_string(g_max_points.load()));
+            std::to_string(g_max_points.load()) + " (parameter max_points)");
 }
 
 // ---------------------------------------------------------------- PCD

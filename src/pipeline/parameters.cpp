@@ -4,8 +4,10 @@
 
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <map>
 #include <stdexcept>
+#include <type_traits>
 
 namespace dsr {
 namespace {
@@ -17,9 +19,29 @@ struct Field {
   std::function<void(const Parameters&, YAML::Emitter&)> write;
 };
 
+// An integer parameter also takes a number written with a fraction or an
+// exponent when its value is integral and fits (5e8, 16.0); 1.5 stays a
+// wrong type. Other types read as YAML reads them.
+template <typename T>
+T readValue(const YAML::Node& n) {
+  if constexpr (std::is_integral_v<T> && !std::is_same_v<T, bool>) {
+    try {
+      return n.as<T>();
+    } catch (const YAML::Exception&) {
+      const double d = n.as<double>();  // throws on a non-number
+      if (!std::isfinite(d) || d != std::trunc(d) || d < double(std::numeric_limits<T>::min()) ||
+          d > double(std::numeric_limits<T>::max()))
+        throw std::invalid_argument("not an integer");
+      return static_cast<T>(d);
+    }
+  } else {
+    return n.as<T>();
+  }
+}
+
 template <typename T>
 Field field(T Parameters::*member) {
-  return {[member](Parameters& p, const YAML::Node& n) { p.*member = n.as<T>(); },
+  return {[member](Parameters& p, const YAML::Node& n) { p.*member = readValue<T>(n); },
           [member](const Parameters& p, YAML::Emitter& e) { e << p.*member; }};
 }
 
@@ -104,7 +126,7 @@ void Parameters::validate() const {
   check(max_walls >= 1 && max_walls <= 1000, "max_walls", "in [1, 1000]");
   check(in(region_angle_deg, 0.1, 90), "region_angle_deg", "in [0.1, 90] deg");
   check(in(region_curvature, 0.0, 1.0), "region_curvature", "in [0, 1]");
-  check(min_region_points >= 3, "min_region_points", ">= 3");
+  check(min_region_points >= 3 && min_region_points <= 1000000, "min_region_points", "in [3, 1e6]");
   check(in(door_min_width, 0.1, 5) && in(door_max_width, door_min_width, 10), "door_min_width/door_max_width",
         "0.1 <= min <= max <= 10 m");
   check(in(door_min_height, 0.5, 5), "door_min_height", "in [0.5, 5] m");
@@ -123,6 +145,7 @@ void Parameters::validate() const {
         "0 <= closed_below <= open_from <= 180 deg");
   check(in(unseen_leaf_min_bound_deg, 0, 180), "unseen_leaf_min_bound_deg", "in [0, 180] deg");
   check(in(reconstruction_spacing, 0.002, 1.0), "reconstruction_spacing", "in [0.002, 1] m");
+  check(random_seed >= 0 && random_seed <= 1000000, "random_seed", "in [0, 1e6]");
 }
 
 std::string dumpParameters(const Parameters& p) {

@@ -44,7 +44,9 @@ struct EvalResult {
 // index, then lower report index).
 // Throws std::invalid_argument (message names the document and field, e.g.
 // "report.doors[1].hinge: ...") when a needed field is missing or mistyped, or
-// when max_center_distance_m is negative or not finite.
+// when max_center_distance_m is negative or not finite. The truth must hold
+// "scene" (simulator ground truth) and the report "points_in" (a pipeline
+// report): swapped or wrong documents are refused, not scored.
 // With in_view_only, truth doors marked "in_view": false (outside a camera's
 // view) are left out: neither missed, nor a false positive when reported.
 EvalResult evaluate(const nlohmann::json& truth, const nlohmann::json& report,

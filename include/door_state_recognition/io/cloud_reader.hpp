@@ -19,6 +19,8 @@ pcl::PointCloud<pcl::PointXYZ> readCloud(const std::string& path);
 // the path in error messages. Used by the fuzz target; nothing is copied.
 pcl::PointCloud<pcl::PointXYZ> readCloudFromMemory(const void* data, std::size_t size,
                                                    const std::string& name = "<memory>");
-// Upper bound on points accepted (default 50,000,000); a header asking more is refused.
+// Upper bound on points accepted (default 50,000,000, the default of the
+// parameter max_points; door_state_cli sets it from its parameters); a header
+// asking more is refused, the message naming max_points.
 void setMaxPoints(std::size_t n);
 }}
