@@ -383,7 +383,8 @@ class DoorStateNodelet : public nodelet::Nodelet {
   void publish(const dsr::PipelineResult& r, const std_msgs::Header& header) {
     std::vector<Eigen::Vector3d> centres;
     for (const auto& d : r.doors) centres.push_back(d.opening_center);
-    const std::vector<std::uint32_t> ids = tracker_.update(centres);
+    // Matched across the pipeline's up vector (-y in a camera optical frame).
+    const std::vector<std::uint32_t> ids = tracker_.update(centres, r.up);
 
     DoorStateArrayPtr out = boost::make_shared<DoorStateArray>();
     out->header = header;

@@ -32,6 +32,7 @@
 #include "door_state_recognition/sim/ground_truth.hpp"
 #include "door_state_recognition/sim/scene.hpp"
 #include "door_state_recognition/sim/sensors.hpp"
+#include "door_state_recognition/tracking/door_tracker.hpp"
 
 using door_state_recognition::DoorStateArray;
 namespace sim = dsr::sim;
@@ -646,6 +647,36 @@ TEST(Reconfigure, CfgDefaultsAreTheCodesDefaults) {
   const std::vector<std::string> all = dsr::parameterNames();
   EXPECT_EQ(names, std::set<std::string>(all.begin(), all.end())) << "the .cfg and the code list different parameters";
   EXPECT_EQ(dsr::dumpParameters(dsr::parseParameters(os.str(), dsr::Parameters(), "cfg")), dsr::dumpParameters(dsr::Parameters()));
+}
+
+// Door ids are matched across the up vector the pipeline found, not on x, y
+// of the output frame: in a camera optical frame (up -y, ~fixed_frame empty)
+// y is height and z is depth.
+TEST(DoorTracker, MatchesAcrossTheUpVectorOfTheCloudsFrame) {
+  const Eigen::Vector3d up_optical(0, -1, 0);
+  {
+    // Two doors one behind the other (same x and y, 2 m apart in depth z):
+    // distinct doors, distinct ids.
+    dsr::DoorTracker t;
+    const std::uint32_t a = t.update({Eigen::Vector3d(0.0, 1.2, 2.0)}, up_optical).at(0);
+    const std::uint32_t b = t.update({Eigen::Vector3d(0.0, 1.2, 4.0)}, up_optical).at(0);
+    EXPECT_NE(a, b) << "a door 2 m deeper took the id of the one in front";
+  }
+  {
+    // The same door whose centre is found 0.8 m higher (y) and 0.1 m off in
+    // depth: the height is ignored, the same id.
+    dsr::DoorTracker t;
+    const std::uint32_t a = t.update({Eigen::Vector3d(0.3, 1.2, 2.0)}, up_optical).at(0);
+    const std::uint32_t b = t.update({Eigen::Vector3d(0.3, 0.4, 2.1)}, up_optical).at(0);
+    EXPECT_EQ(a, b) << "a height difference along up split one door into two";
+  }
+  {
+    // z up (the default): as before.
+    dsr::DoorTracker t;
+    const std::uint32_t a = t.update({Eigen::Vector3d(2.0, 1.0, 0.0)}).at(0);
+    EXPECT_EQ(t.update({Eigen::Vector3d(2.1, 1.0, 0.9)}).at(0), a);
+    EXPECT_NE(t.update({Eigen::Vector3d(2.0, 3.0, 0.0)}).at(0), a);
+  }
 }
 
 TEST(BagPlayback, DoorsOfThePlayedBagMatchItsTruth) {
