@@ -13,7 +13,10 @@
 // Publishes `doors` (DoorStateArray), `markers` (MarkerArray) and
 // `reconstructed_walls` (PointCloud2). Bad input is logged (throttled) and
 // answered with an empty DoorStateArray carrying the input's header; nothing
-// here may throw into the nodelet manager.
+// here may throw into the nodelet manager. Bad ~ parameters at start (unknown
+// name, wrong type, out of range) are refused before dynamic_reconfigure can
+// clamp or ignore them: the nodelet then stays loaded but does nothing except
+// log the problems and report them in its diagnostics.
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
 #include <message_filters/subscriber.h>
@@ -26,6 +29,7 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
+#include <xmlrpcpp/XmlRpcException.h>
 #include <visualization_msgs/MarkerArray.h>
 
 #include <algorithm>
@@ -37,7 +41,9 @@
 #include <condition_variable>
 #include <memory>
 #include <mutex>
+#include <map>
 #include <sstream>
+#include <vector>
 #include <thread>
 
 #include "door_state_recognition/DoorStateArray.h"
@@ -83,6 +89,186 @@ std::string nonFinite(const DoorStateConfig& config) {
   return bad.empty() ? bad : "parameter " + bad + " is not a finite number";
 }
 
+bool isNumber(const XmlRpc::XmlRpcValue& v) {
+  return v.getType() == XmlRpc::XmlRpcValue::TypeDouble || v.getType() == XmlRpc::XmlRpcValue::TypeInt;
+}
+double asDouble(XmlRpc::XmlRpcValue& v) {
+  return v.getType() == XmlRpc::XmlRpcValue::TypeInt ? static_cast<double>(static_cast<int>(v)) : static_cast<double>(v);
+}
+
+std::string typeName(const XmlRpc::XmlRpcValue& v) {
+  switch (v.getType()) {
+    case XmlRpc::XmlRpcValue::TypeBoolean: return "a bool";
+    case XmlRpc::XmlRpcValue::TypeInt: return "an int";
+    case XmlRpc::XmlRpcValue::TypeDouble: return "a double";
+    case XmlRpc::XmlRpcValue::TypeString: return "a string";
+    case XmlRpc::XmlRpcValue::TypeDateTime: return "a date";
+    case XmlRpc::XmlRpcValue::TypeBase64: return "binary data";
+    case XmlRpc::XmlRpcValue::TypeArray: return "a list";
+    case XmlRpc::XmlRpcValue::TypeStruct: return "a map";
+    default: return "invalid";
+  }
+}
+
+// `value` as written in a YAML 1.2 document (strings quoted); 17 digits
+// round-trip a double, 10 are for messages.
+std::string yamlValue(XmlRpc::XmlRpcValue& v, int precision = 17) {
+  std::ostringstream os;
+  os.precision(precision);
+  switch (v.getType()) {
+    case XmlRpc::XmlRpcValue::TypeInt: os << static_cast<int>(v); break;
+    case XmlRpc::XmlRpcValue::TypeDouble: os << static_cast<double>(v); break;
+    case XmlRpc::XmlRpcValue::TypeBoolean: os << (static_cast<bool>(v) ? "true" : "false"); break;
+    default: {
+      os << '"';
+      for (char c : static_cast<std::string>(v)) {
+        if (c == '"' || c == '\\') os << '\\';
+        os << c;
+      }
+      os << '"';
+    }
+  }
+  return os.str();
+}
+
+// Checks every ~ parameter as it stands on the parameter server, before the
+// dynamic_reconfigure server reads them: that server ignores a value of the
+// wrong type (the default stays), clamps a number to the .cfg range and
+// never sees an unknown name. Here each of these is a problem, named with
+// what would be valid: an unknown name (not a pipeline parameter nor one of
+// the nodelet's own), a wrong type (a double parameter takes an int or a
+// double), a value outside the .cfg range or refused by the pipeline's own
+// validation (dsr::parseParameters, as `door_state_cli --config` reads its
+// YAML). Returns one line per problem; none: all good.
+std::vector<std::string> checkPrivateParameters(const ros::NodeHandle& pnh) {
+  std::vector<std::string> problems;
+  const std::string ns = pnh.getNamespace();
+  XmlRpc::XmlRpcValue all;
+  if (!pnh.getParam(ns, all)) return problems;  // nothing set: the defaults
+  if (all.getType() != XmlRpc::XmlRpcValue::TypeStruct) {
+    problems.push_back(ns + " is " + typeName(all) + ", not a namespace of parameters");
+    return problems;
+  }
+  const DoorStateConfig lo = DoorStateConfig::__getMin__(), hi = DoorStateConfig::__getMax__();
+  std::map<std::string, DoorStateConfig::AbstractParamDescriptionConstPtr> cfg;
+  for (const auto& d : DoorStateConfig::__getParamDescriptions__()) cfg[d->name] = d;
+  std::string yaml_all;  // every well-typed pipeline parameter, for the checks across parameters
+  for (auto it = all.begin(); it != all.end(); ++it) {
+    const std::string& name = it->first;
+    XmlRpc::XmlRpcValue& v = it->second;
+    const std::string pname = ns + "/" + name;
+    const bool scalar = v.getType() == XmlRpc::XmlRpcValue::TypeInt || v.getType() == XmlRpc::XmlRpcValue::TypeDouble ||
+                        v.getType() == XmlRpc::XmlRpcValue::TypeBoolean || v.getType() == XmlRpc::XmlRpcValue::TypeString;
+    const std::string got = typeName(v) + (scalar ? " (" + yamlValue(v, 10) + ")" : std::string());
+    // The nodelet's own.
+    if (name == "fixed_frame") {
+      if (v.getType() != XmlRpc::XmlRpcValue::TypeString) problems.push_back(pname + " is " + got + ": must be a frame name (a string), empty for the cloud's own frame");
+      continue;
+    }
+    if (name == "tf_queue_size") {
+      if (v.getType() != XmlRpc::XmlRpcValue::TypeInt || static_cast<int>(v) < 1) problems.push_back(pname + " is " + got + ": must be an int >= 1");
+      continue;
+    }
+    if (name == "diagnostic_period") {  // read by diagnostic_updater::Updater
+      if (!isNumber(v) || !(asDouble(v) > 0)) problems.push_back(pname + " is " + got + ": must be a number of seconds > 0");
+      continue;
+    }
+    const auto c = cfg.find(name);
+    if (c == cfg.end()) {
+      problems.push_back(pname + ": unknown parameter (the pipeline's are those of config/default.yaml; the nodelet's own are fixed_frame, tf_queue_size, diagnostic_period)");
+      continue;
+    }
+    const std::string& type = c->second->type;
+    boost::any amin, amax;
+    c->second->getValue(lo, amin);
+    c->second->getValue(hi, amax);
+    std::ostringstream range;
+    range.precision(10);
+    bool ok_type = false, in_cfg = true;
+    if (type == "double") {
+      ok_type = isNumber(v);
+      const double a = boost::any_cast<double>(amin), b = boost::any_cast<double>(amax);
+      if (ok_type) {
+        const double x = asDouble(v);
+        in_cfg = std::isfinite(x) && x >= a && x <= b;
+      }
+      range << "a number in [" << a << ", " << b << "]";
+    } else if (type == "int") {
+      ok_type = v.getType() == XmlRpc::XmlRpcValue::TypeInt;
+      const int a = boost::any_cast<int>(amin), b = boost::any_cast<int>(amax);
+      if (ok_type) in_cfg = static_cast<int>(v) >= a && static_cast<int>(v) <= b;
+      range << "an int in [" << a << ", " << b << "]";
+    } else if (type == "str") {
+      ok_type = v.getType() == XmlRpc::XmlRpcValue::TypeString;
+      range << "a string";
+    } else if (type == "bool") {
+      ok_type = v.getType() == XmlRpc::XmlRpcValue::TypeBoolean;
+      range << "true or false";
+    }
+    if (!ok_type) {
+      std::string hint;
+      if (v.getType() == XmlRpc::XmlRpcValue::TypeString && type != "str")
+        hint = " (YAML 1.1, as rosparam and roslaunch read it, takes a number with an exponent and no dot, e.g. 2e-2, as a string: write 2.0e-2 or 0.02)";
+      problems.push_back(pname + " is " + got + ": must be " + range.str() + hint);
+      continue;
+    }
+    if (type == "double" && !std::isfinite(asDouble(v))) {
+      problems.push_back(pname + " is " + got + ": must be " + range.str() + ", a finite number");
+      continue;
+    }
+    const std::string line = name + ": " + yamlValue(v) + "\n";
+    // The pipeline's own range first (it is the narrower one where they differ), then the .cfg's.
+    try {
+      dsr::parseParameters(line, dsr::Parameters(), pname);
+    } catch (const std::exception& e) {
+      problems.push_back(e.what());
+      continue;
+    }
+    if (!in_cfg) {
+      problems.push_back(pname + " = " + yamlValue(v, 10) + " out of range: must be " + range.str() +
+                         " (the range of cfg/DoorState.cfg; dynamic_reconfigure would clamp it)");
+      continue;
+    }
+    yaml_all += line;
+  }
+  if (problems.empty()) {
+    try {
+      dsr::parseParameters(yaml_all, dsr::Parameters(), ns);  // e.g. door_min_width above door_max_width
+    } catch (const std::exception& e) {
+      problems.push_back(e.what());
+    }
+  }
+  return problems;
+}
+
+// The parameters that `config` sets, relative to `before`, to an end of its
+// .cfg range: "name = value (the upper end of [min, max])", comma-separated.
+// dynamic_reconfigure clamps a request to the range before the callback sees
+// it, and does not say so: a value asked beyond the range arrives as the end
+// of the range. The callback cannot tell a clamped request from one that asked
+// for the end itself, so this names both.
+std::string atRangeEnd(const DoorStateConfig& config, const DoorStateConfig& before) {
+  const DoorStateConfig lo = DoorStateConfig::__getMin__(), hi = DoorStateConfig::__getMax__();
+  std::ostringstream os;
+  os.precision(10);
+  bool any = false;
+  for (const auto& d : DoorStateConfig::__getParamDescriptions__()) {
+    if (d->type != "double" && d->type != "int") continue;
+    boost::any v, b, a, z;
+    d->getValue(config, v);
+    d->getValue(before, b);
+    d->getValue(lo, a);
+    d->getValue(hi, z);
+    auto num = [&](const boost::any& x) { return d->type == "double" ? boost::any_cast<double>(x) : boost::any_cast<int>(x); };
+    const double x = num(v);
+    if (x == num(b) || (x != num(a) && x != num(z))) continue;
+    os << (any ? ", " : "") << d->name << " = " << x << " (the " << (x == num(a) ? "lower" : "upper") << " end of ["
+       << num(a) << ", " << num(z) << "])";
+    any = true;
+  }
+  return os.str();
+}
+
 // The last kWindow values of a figure, without allocating per value.
 class Window {
  public:
@@ -117,6 +303,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
     // (it finishes the cloud under way: the pipeline cannot be interrupted).
     // Nothing here may throw.
     try {
+      refusal_timer_.stop();
       diagnostics_timer_.stop();
       {
         std::lock_guard<std::mutex> lock(connect_mutex_);
@@ -137,6 +324,23 @@ class DoorStateNodelet : public nodelet::Nodelet {
   void onInit() override {
     nh_ = getNodeHandle();
     pnh_ = getPrivateNodeHandle();
+    // The ~ parameters are checked as they stand, before anything reads them
+    // (see checkPrivateParameters). Any problem: the nodelet stays loaded but
+    // does not start: no subscription, no dynamic_reconfigure server, nothing
+    // published but its diagnostics (ERROR), and the problems logged as
+    // errors now and again every 10 s. Nothing is thrown into the manager.
+    std::vector<std::string> problems;
+    try {
+      problems = checkPrivateParameters(pnh_);
+    } catch (const XmlRpc::XmlRpcException& e) {
+      problems.push_back("cannot read the ~ parameters: " + e.getMessage());
+    } catch (const std::exception& e) {
+      problems.push_back(std::string("cannot read the ~ parameters: ") + e.what());
+    }
+    if (!problems.empty()) {
+      refuseToStart(problems);
+      return;
+    }
     pnh_.param<std::string>("fixed_frame", fixed_frame_, "");
     pnh_.param("tf_queue_size", tf_queue_size_, 5);
     if (tf_queue_size_ < 1) tf_queue_size_ = 1;
@@ -175,6 +379,29 @@ class DoorStateNodelet : public nodelet::Nodelet {
     diagnostics_timer_ = nh_.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { diagnostics_->update(); });
     NODELET_INFO("door_state: waiting for subscribers before subscribing to %s (fixed_frame '%s')",
                  nh_.resolveName("points").c_str(), fixed_frame_.c_str());
+  }
+
+  // Bad ~ parameters: log them, report them in the diagnostics, do nothing else.
+  void refuseToStart(const std::vector<std::string>& problems) {
+    std::string all;
+    for (const auto& p : problems) all += (all.empty() ? "" : "; ") + p;
+    refused_ = "parameters refused, not processing clouds: " + all;
+    auto log = [this, problems] {
+      for (const auto& p : problems) NODELET_ERROR("door_state: parameter refused: %s", p.c_str());
+      NODELET_ERROR("door_state: %zu bad ~ parameter(s): this nodelet does not subscribe to %s nor publish doors; "
+                    "fix them and restart it",
+                    problems.size(), nh_.resolveName("points").c_str());
+    };
+    log();
+    refusal_timer_ = nh_.createWallTimer(ros::WallDuration(10.0), [log](const ros::WallTimerEvent&) { log(); });
+    try {
+      diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh_, pnh_, getName());
+      diagnostics_->setHardwareID("none");
+      diagnostics_->add("door_state", this, &DoorStateNodelet::diagnose);
+      diagnostics_timer_ = nh_.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { diagnostics_->update(); });
+    } catch (const std::exception& e) {
+      NODELET_ERROR("door_state: no diagnostics: %s", e.what());
+    }
   }
 
   // Lazy subscription: subscribe to the input only while someone listens.
@@ -218,6 +445,17 @@ class DoorStateNodelet : public nodelet::Nodelet {
   // server stores what the callback leaves in `config` on the parameter
   // server, publishes it on parameter_updates and returns it to the caller.
   void reconfigure(DoorStateConfig& config, uint32_t) {
+    // The first call carries the ~ parameters, checked in onInit; later ones
+    // are requests, clamped by the server to the .cfg range before they get
+    // here: say so when a value lands on an end of its range.
+    if (configured_) {
+      const std::string ends = atRangeEnd(config, last_good_config_);
+      if (!ends.empty())
+        NODELET_WARN("door_state: dynamic_reconfigure request: %s; the server clamps a value asked beyond the range "
+                     "to its end without telling, so the value asked may have been outside it and was clamped",
+                     ends.c_str());
+    }
+    configured_ = true;
     try {
       const std::string non_finite = nonFinite(config);
       if (!non_finite.empty()) throw std::invalid_argument(non_finite);
@@ -383,7 +621,8 @@ class DoorStateNodelet : public nodelet::Nodelet {
   void publish(const dsr::PipelineResult& r, const std_msgs::Header& header) {
     std::vector<Eigen::Vector3d> centres;
     for (const auto& d : r.doors) centres.push_back(d.opening_center);
-    const std::vector<std::uint32_t> ids = tracker_.update(centres);
+    // Matched across the pipeline's up vector (-y in a camera optical frame).
+    const std::vector<std::uint32_t> ids = tracker_.update(centres, r.up);
 
     DoorStateArrayPtr out = boost::make_shared<DoorStateArray>();
     out->header = header;
@@ -448,6 +687,12 @@ class DoorStateNodelet : public nodelet::Nodelet {
     last_diag_ = now;
     last_in_ = in;
     std::lock_guard<std::mutex> lock(diag_mutex_);
+    if (!refused_.empty()) {
+      stat.summary(diagnostic_msgs::DiagnosticStatus::ERROR, refused_);
+      stat.add("last error", refused_);
+      stat.add("subscribed", "no");
+      return;
+    }
     const bool recent_error = !last_error_.empty() && (now - last_error_time_).toSec() < 10.0;
     stat.summary(recent_error ? diagnostic_msgs::DiagnosticStatus::WARN : diagnostic_msgs::DiagnosticStatus::OK,
                  recent_error ? last_error_ : (subscribed_ ? "processing" : "idle: nobody listens"));
@@ -487,6 +732,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
   dsr::Parameters params_;
   std::shared_ptr<const dsr::Pipeline> pipeline_;  // swapped under process_mutex_
   DoorStateConfig last_good_config_;                // the configuration in force
+  bool configured_ = false;                         // reconfigure() has run once (under the server's mutex)
   std::string last_refusal_;
   ros::WallTime last_refusal_time_;
   dsr::DoorTracker tracker_;                        // worker only
@@ -510,6 +756,8 @@ class DoorStateNodelet : public nodelet::Nodelet {
   std::atomic<double> last_ms_{0.0};
   std::string last_error_;
   ros::WallTime last_error_time_;
+  std::string refused_;          // set once in onInit: bad ~ parameters, not started
+  ros::WallTimer refusal_timer_;
 };
 
 }  // namespace door_state_recognition

@@ -1,6 +1,7 @@
 // Stable door ids across consecutive clouds: a door keeps its id while it is
-// seen again within match_distance (opening centres, horizontally, in a
-// fixed frame) and for up to forget_after clouds without being seen.
+// seen again within match_distance (opening centres, measured in the plane
+// perpendicular to the up vector: the height of a centre is ignored) and for
+// up to forget_after clouds without being seen.
 // ROS-free.
 #pragma once
 
@@ -15,9 +16,12 @@ class DoorTracker {
   explicit DoorTracker(double match_distance = 0.5, int forget_after = 10)
       : match_distance_(match_distance), forget_after_(forget_after) {}
 
-  // centres: opening centres of this cloud's doors in a fixed frame, up = z
-  // of that frame. Returns one id per centre, in order.
-  std::vector<std::uint32_t> update(const std::vector<Eigen::Vector3d>& centres);
+  // centres: opening centres of this cloud's doors; up: the up vector of
+  // their frame (the pipeline's PipelineResult::up; -y in a camera optical
+  // frame). Distances are taken perpendicular to it. Returns one id per
+  // centre, in order.
+  std::vector<std::uint32_t> update(const std::vector<Eigen::Vector3d>& centres,
+                                    const Eigen::Vector3d& up = Eigen::Vector3d::UnitZ());
   void reset() { tracks_.clear(); }
   std::size_t tracked() const { return tracks_.size(); }
 
