@@ -447,6 +447,29 @@ bool ViewTop::inView(const Eigen::Vector3f& q, float slack) const {
   return t >= min_tan[b] - slack && t <= max_tan[b] + slack;
 }
 
+namespace {
+// Lists of at least this many points are read in two halves at once by addWallSegments.
+constexpr std::size_t kSplitSegment = 10000;
+
+// f(0) and, when split, f(1) at once: f(1) as an OpenMP task (taken by a
+// thread of the enclosing parallel region when it comes free, or by this
+// one when it waits), f(0) here; outside a parallel region in turn. The
+// first exception thrown is rethrown here.
+template <class F>
+void bothHalves(bool split, const F& f) {
+  if (!split) {
+    f(0);
+    return;
+  }
+  util::FirstError error;
+#pragma omp task shared(error, f)
+  error.run([&] { f(1); });
+  error.run([&] { f(0); });
+#pragma omp taskwait
+  error.rethrow();
+}
+}  // namespace
+
 void addWallSegments(const Points& points, const std::vector<int>& inliers, const Eigen::Vector2d& point,
                      const Eigen::Vector2d& direction, const Eigen::Vector2d& normal, double floor_z, double height_top,
                      bool ceiling_known, const Parameters& p, std::vector<WallPlane>& walls,
@@ -495,9 +518,17 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
     unknown = static_cast<double>(nu) / bins;
   };
   // Split along the wall at gaps wider than wall_gap.
-  std::vector<std::pair<double, int>> along;
-  along.reserve(inliers.size());
-  for (int i : inliers) along.push_back({(Eigen::Vector2d(points[i].x(), points[i].y()) - point).dot(direction), i});
+  // (Many inliers: in two halves at once.)
+  std::vector<std::pair<double, int>> along(inliers.size());
+  {
+    const std::size_t n = inliers.size(), mid = n >= kSplitSegment ? n / 2 : n;
+    bothHalves(mid < n, [&](int h) {
+      for (std::size_t k = h ? mid : 0, end = h ? n : mid; k < end; ++k) {
+        const int i = inliers[k];
+        along[k] = {(Eigen::Vector2d(points[i].x(), points[i].y()) - point).dot(direction), i};
+      }
+    });
+  }
   util::sortPairs(along);  // std::sort's order, in linear time
   std::size_t start = 0;
   for (std::size_t k = 1; k <= along.size(); ++k) {
@@ -517,6 +548,7 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
     w.s_max = along[k - 1].first;
     w.z_min = 1e9;
     w.z_max = -1e9;
+    w.inliers.reserve(k - start);
     for (std::size_t j = start; j < k; ++j) {
       w.inliers.push_back(along[j].second);
       w.z_min = std::min<double>(w.z_min, points[along[j].second].z());
@@ -529,14 +561,21 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
     // on most of its bearings (a camera frame cuts a near wall below the ceiling).
     auto cutByView = [&]() {
       if (!view || view->max_tan.empty()) return false;
-      std::vector<float> top(view->max_tan.size(), -std::numeric_limits<float>::infinity());
-      for (int i : w.inliers) {
-        const auto& q = points[i];
-        const int b = view->bin(q);
-        // A camera's rows come top down: a bearing's first point is mostly its highest.
-        if (b >= 0 && !surelyBelow(*view, q, top[b]))
-          top[b] = std::max(top[b], view->tanElevation(q));
-      }
+      // Each bearing's highest (a greatest value, whatever the order it is
+      // taken in): many inliers in two halves at once, each into bins of its own.
+      std::vector<float> top(view->max_tan.size(), -std::numeric_limits<float>::infinity()), top_second;
+      const std::size_t n = w.inliers.size(), mid = n >= kSplitSegment ? n / 2 : n;
+      bothHalves(mid < n, [&](int h) {
+        std::vector<float>& t = h ? top_second : top;
+        if (h) t.assign(top.size(), -std::numeric_limits<float>::infinity());
+        for (std::size_t k = h ? mid : 0, end = h ? n : mid; k < end; ++k) {
+          const auto& q = points[w.inliers[k]];
+          const int b = view->bin(q);
+          // A camera's rows come top down: a bearing's first point is mostly its highest.
+          if (b >= 0 && !surelyBelow(*view, q, t[b])) t[b] = std::max(t[b], view->tanElevation(q));
+        }
+      });
+      for (std::size_t b = 0; b < top_second.size(); ++b) top[b] = std::max(top[b], top_second[b]);
       int bins = 0, cut = 0;
       for (std::size_t b = 0; b < top.size(); ++b)
         if (std::isfinite(top[b])) ++bins, cut += top[b] >= view->max_tan[b] - kViewTopSlack;
