@@ -91,8 +91,10 @@ bool NeighbourGrid::buildDense(const std::vector<Eigen::Vector3i>& cell, const E
   std::vector<std::uint32_t> first, coarse_first;
   std::uint64_t last = ~std::uint64_t(0);  // no key
   std::uint32_t last_id = 0;
+  constexpr std::size_t kAhead = 16;  // points ahead whose coarse entry is fetched into cache
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint64_t k = key[i];
+    if (i + kAhead < n) __builtin_prefetch(&dense_[key[i + kAhead] >> 3]);
     // Points come in scan order: runs of them share a cell.
     if (k != last) {
       std::uint32_t& kc = dense_[k >> 3];

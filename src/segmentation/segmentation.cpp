@@ -447,6 +447,29 @@ bool ViewTop::inView(const Eigen::Vector3f& q, float slack) const {
   return t >= min_tan[b] - slack && t <= max_tan[b] + slack;
 }
 
+namespace {
+// Lists of at least this many points are read in two halves at once by addWallSegments.
+constexpr std::size_t kSplitSegment = 10000;
+
+// f(0) and, when split, f(1) at once: f(1) as an OpenMP task (taken by a
+// thread of the enclosing parallel region when it comes free, or by this
+// one when it waits), f(0) here; outside a parallel region in turn. The
+// first exception thrown is rethrown here.
+template <class F>
+void bothHalves(bool split, const F& f) {
+  if (!split) {
+    f(0);
+    return;
+  }
+  util::FirstError error;
+#pragma omp task shared(error, f)
+  error.run([&] { f(1); });
+  error.run([&] { f(0); });
+#pragma omp taskwait
+  error.rethrow();
+}
+}  // namespace
+
 void addWallSegments(const Points& points, const std::vector<int>& inliers, const Eigen::Vector2d& point,
                      const Eigen::Vector2d& direction, const Eigen::Vector2d& normal, double floor_z, double height_top,
                      bool ceiling_known, const Parameters& p, std::vector<WallPlane>& walls,
@@ -495,9 +518,17 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
     unknown = static_cast<double>(nu) / bins;
   };
   // Split along the wall at gaps wider than wall_gap.
-  std::vector<std::pair<double, int>> along;
-  along.reserve(inliers.size());
-  for (int i : inliers) along.push_back({(Eigen::Vector2d(points[i].x(), points[i].y()) - point).dot(direction), i});
+  // (Many inliers: in two halves at once.)
+  std::vector<std::pair<double, int>> along(inliers.size());
+  {
+    const std::size_t n = inliers.size(), mid = n >= kSplitSegment ? n / 2 : n;
+    bothHalves(mid < n, [&](int h) {
+      for (std::size_t k = h ? mid : 0, end = h ? n : mid; k < end; ++k) {
+        const int i = inliers[k];
+        along[k] = {(Eigen::Vector2d(points[i].x(), points[i].y()) - point).dot(direction), i};
+      }
+    });
+  }
   util::sortPairs(along);  // std::sort's order, in linear time
   std::size_t start = 0;
   for (std::size_t k = 1; k <= along.size(); ++k) {
@@ -517,6 +548,7 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
     w.s_max = along[k - 1].first;
     w.z_min = 1e9;
     w.z_max = -1e9;
+    w.inliers.reserve(k - start);
     for (std::size_t j = start; j < k; ++j) {
       w.inliers.push_back(along[j].second);
       w.z_min = std::min<double>(w.z_min, points[along[j].second].z());
@@ -529,14 +561,21 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
     // on most of its bearings (a camera frame cuts a near wall below the ceiling).
     auto cutByView = [&]() {
       if (!view || view->max_tan.empty()) return false;
-      std::vector<float> top(view->max_tan.size(), -std::numeric_limits<float>::infinity());
-      for (int i : w.inliers) {
-        const auto& q = points[i];
-        const int b = view->bin(q);
-        // A camera's rows come top down: a bearing's first point is mostly its highest.
-        if (b >= 0 && !surelyBelow(*view, q, top[b]))
-          top[b] = std::max(top[b], view->tanElevation(q));
-      }
+      // Each bearing's highest (a greatest value, whatever the order it is
+      // taken in): many inliers in two halves at once, each into bins of its own.
+      std::vector<float> top(view->max_tan.size(), -std::numeric_limits<float>::infinity()), top_second;
+      const std::size_t n = w.inliers.size(), mid = n >= kSplitSegment ? n / 2 : n;
+      bothHalves(mid < n, [&](int h) {
+        std::vector<float>& t = h ? top_second : top;
+        if (h) t.assign(top.size(), -std::numeric_limits<float>::infinity());
+        for (std::size_t k = h ? mid : 0, end = h ? n : mid; k < end; ++k) {
+          const auto& q = points[w.inliers[k]];
+          const int b = view->bin(q);
+          // A camera's rows come top down: a bearing's first point is mostly its highest.
+          if (b >= 0 && !surelyBelow(*view, q, t[b])) t[b] = std::max(t[b], view->tanElevation(q));
+        }
+      });
+      for (std::size_t b = 0; b < top_second.size(); ++b) top[b] = std::max(top[b], top_second[b]);
       int bins = 0, cut = 0;
       for (std::size_t b = 0; b < top.size(); ++b)
         if (std::isfinite(top[b])) ++bins, cut += top[b] >= view->max_tan[b] - kViewTopSlack;
@@ -643,6 +682,64 @@ __attribute__((target("avx2"))) std::size_t countInliersAvx2(const float* x, con
 }
 #endif
 
+// Of the n pool points (x, y, normal nx_i, ny_i; pool indices idx), those
+// countInliersScalar counts, appended in order: index to in, (x, y) in
+// double to q.
+void collectInliersScalar(const float* x, const float* y, const float* nxs, const float* nys, const int* idx,
+                          std::size_t n, double qx, double qy, double nx, double ny, double wd, double agree,
+                          std::vector<int>& in, std::vector<Eigen::Vector2d>& q) {
+  for (std::size_t j = 0; j < n; ++j) {
+    const double rx = x[j], ry = y[j];
+    const double dist = (rx - qx) * nx + (ry - qy) * ny;
+    const double dot = nx * static_cast<double>(nxs[j]) + ny * static_cast<double>(nys[j]);
+    if (std::abs(dist) < wd && std::abs(dot) > agree) {
+      in.push_back(idx[j]);
+      q.emplace_back(rx, ry);
+    }
+  }
+}
+
+#ifdef DSR_COUNT_INLIERS_AVX2
+// collectInliersScalar four at a time with AVX2 (no FMA): the same double
+// operations in each lane, the same inliers in the same order.
+__attribute__((target("avx2"))) void collectInliersAvx2(const float* x, const float* y, const float* nxs,
+                                                         const float* nys, const int* idx, std::size_t n, double qx,
+                                                         double qy, double nx, double ny, double wd, double agree,
+                                                         std::vector<int>& in, std::vector<Eigen::Vector2d>& q) {
+  std::size_t j = 0;
+  const __m256d vqx = _mm256_set1_pd(qx), vqy = _mm256_set1_pd(qy), vnx = _mm256_set1_pd(nx), vny = _mm256_set1_pd(ny);
+  const __m256d vwd = _mm256_set1_pd(wd), vag = _mm256_set1_pd(agree);
+  const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL));
+  for (; j + 4 <= n; j += 4) {
+    const __m256d px = _mm256_cvtps_pd(_mm_loadu_ps(&x[j])), py = _mm256_cvtps_pd(_mm_loadu_ps(&y[j]));
+    const __m256d pnx = _mm256_cvtps_pd(_mm_loadu_ps(&nxs[j])), pny = _mm256_cvtps_pd(_mm_loadu_ps(&nys[j]));
+    const __m256d dist = _mm256_add_pd(_mm256_mul_pd(_mm256_sub_pd(px, vqx), vnx), _mm256_mul_pd(_mm256_sub_pd(py, vqy), vny));
+    const __m256d dot = _mm256_add_pd(_mm256_mul_pd(vnx, pnx), _mm256_mul_pd(vny, pny));
+    const __m256d ok = _mm256_and_pd(_mm256_cmp_pd(_mm256_and_pd(dist, abs_mask), vwd, _CMP_LT_OQ),
+                                     _mm256_cmp_pd(_mm256_and_pd(dot, abs_mask), vag, _CMP_GT_OQ));
+    unsigned bits = static_cast<unsigned>(_mm256_movemask_pd(ok));
+    while (bits) {
+      const int k = __builtin_ctz(bits);
+      bits &= bits - 1;
+      in.push_back(idx[j + k]);
+      q.emplace_back(static_cast<double>(x[j + k]), static_cast<double>(y[j + k]));
+    }
+  }
+  _mm256_zeroupper();
+  collectInliersScalar(x + j, y + j, nxs + j, nys + j, idx + j, n - j, qx, qy, nx, ny, wd, agree, in, q);
+}
+#endif
+
+void collectInliers(const float* x, const float* y, const float* nxs, const float* nys, const int* idx, std::size_t n,
+                    double qx, double qy, double nx, double ny, double wd, double agree, std::vector<int>& in,
+                    std::vector<Eigen::Vector2d>& q) {
+#ifdef DSR_COUNT_INLIERS_AVX2
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  if (avx2) return collectInliersAvx2(x, y, nxs, nys, idx, n, qx, qy, nx, ny, wd, agree, in, q);
+#endif
+  collectInliersScalar(x, y, nxs, nys, idx, n, qx, qy, nx, ny, wd, agree, in, q);
+}
+
 std::size_t countInliers(const float* x, const float* y, const float* nxs, const float* nys, std::size_t n, double qx,
                          double qy, double nx, double ny, double wd, double agree) {
 #ifdef DSR_COUNT_INLIERS_AVX2
@@ -661,6 +758,15 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
   pool.reserve(points.size());
   for (std::size_t i = 0; i < points.size(); ++i)
     if (std::abs(normals.n[i].z()) < p.vertical_normal_z && points[i].z() > floor_z + 0.05) pool.push_back(static_cast<int>(i));
+  // The pool's x, y and normal x, y side by side (kept in the pool's order
+  // as it shrinks): the sample and the inlier passes read them in turn
+  // instead of gathering them.
+  std::vector<float> px(pool.size()), py(pool.size()), pnx(pool.size()), pny(pool.size());
+  for (std::size_t j = 0; j < pool.size(); ++j) {
+    const int i = pool[j];
+    px[j] = points[i].x(), py[j] = points[i].y();
+    pnx[j] = normals.n[i].x(), pny[j] = normals.n[i].y();
+  }
   std::vector<WallPlane> walls;
   std::mt19937 rng(static_cast<unsigned>(p.random_seed));
   std::vector<float> sx, sy, snx, sny;  // the scored sample, side by side
@@ -698,21 +804,24 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
       int needed = p.ransac_iterations;
       // The scored sample (every stride-th point of the pool) in arrays of
       // x, y and the normal's x, y, read in turn instead of gathered.
-      sx.clear(), sy.clear(), snx.clear(), sny.clear();
-      for (std::size_t j = 0; j < pool.size(); j += stride) {
-        const int i = pool[j];
-        sx.push_back(points[i].x()), sy.push_back(points[i].y());
-        snx.push_back(normals.n[i].x()), sny.push_back(normals.n[i].y());
+      // Every point of the pool (stride 1): the pool's own arrays.
+      const float *sxp = px.data(), *syp = py.data(), *snxp = pnx.data(), *snyp = pny.data();
+      if (stride > 1) {
+        sx.clear(), sy.clear(), snx.clear(), sny.clear();
+        for (std::size_t j = 0; j < pool.size(); j += stride) {
+          sx.push_back(px[j]), sy.push_back(py[j]);
+          snx.push_back(pnx[j]), sny.push_back(pny[j]);
+        }
+        sxp = sx.data(), syp = sy.data(), snxp = snx.data(), snyp = sny.data();
       }
-      const std::size_t ns = sx.size();
+      const std::size_t ns = (pool.size() + stride - 1) / stride;
       const double wd = p.wall_distance, agree = p.wall_normal_agreement;
       // The plane of pool point s scored on the sample (0 if s has no normal).
       auto score = [&](int s) -> std::size_t {
         Eigen::Vector2d n(normals.n[s].x(), normals.n[s].y());
         if (n.norm() < 0.5) return 0;
         n.normalize();
-        return countInliers(sx.data(), sy.data(), snx.data(), sny.data(), ns, points[s].x(), points[s].y(), n.x(),
-                            n.y(), wd, agree);
+        return countInliers(sxp, syp, snxp, snyp, ns, points[s].x(), points[s].y(), n.x(), n.y(), wd, agree);
       };
       // The first kMinRansacIterations draws are scored whatever they score
       // (needed never falls below): drawn in turn as the loop draws them, and
@@ -744,16 +853,12 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
       inl.reserve(pool.size());
       q2.reserve(pool.size());
       // The inliers of pool[j0, j1) in pool order.
+      // (Those within wall_distance of the line whose normal agrees: |(r -
+      // best_pt) . best_n| and |best_n . n_i| in double, from the pool's arrays.)
       auto inliersOf = [&](std::size_t j0, std::size_t j1, std::vector<int>& in, std::vector<Eigen::Vector2d>& q) {
-        for (std::size_t j = j0; j < j1; ++j) {
-          const int i = pool[j];
-          const Eigen::Vector2d r(points[i].x(), points[i].y());
-          if (std::abs((r - best_pt).dot(best_n)) < p.wall_distance &&
-              std::abs(best_n.x() * normals.n[i].x() + best_n.y() * normals.n[i].y()) > p.wall_normal_agreement) {
-            in.push_back(i);
-            q.push_back(r);
-          }
-        }
+        collectInliers(px.data() + j0, py.data() + j0, pnx.data() + j0, pny.data() + j0, pool.data() + j0, j1 - j0,
+                       best_pt.x(), best_pt.y(), best_n.x(), best_n.y(), p.wall_distance, p.wall_normal_agreement, in,
+                       q);
       };
       // The inliers of the whole pool: a large pool in two halves at once,
       // the second as a task into lists of its own (moved out when done: the
@@ -800,17 +905,19 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
       // Remove the inliers from the pool whatever becomes of them (they are
       // a part of it, in its order).
       {
-        std::vector<int> rest;
-        rest.reserve(pool.size());
-        std::size_t k = 0;
-        for (int i : pool) {
+        std::size_t k = 0, kept = 0;
+        for (std::size_t j = 0; j < pool.size(); ++j) {
+          const int i = pool[j];
           if (k < inl.size() && inl[k] == i) {
             ++k;
             continue;
           }
-          rest.push_back(i);
+          pool[kept] = i;
+          px[kept] = px[j], py[kept] = py[j], pnx[kept] = pnx[j], pny[kept] = pny[j];
+          ++kept;
         }
-        pool.swap(rest);
+        pool.resize(kept);
+        px.resize(kept), py.resize(kept), pnx.resize(kept), pny.resize(kept);
       }
       const Eigen::Vector2d dir(best_n.y(), -best_n.x());
       if ((viewpoint - best_pt).dot(best_n) < 0) best_n = -best_n;

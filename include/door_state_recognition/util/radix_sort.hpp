@@ -83,9 +83,17 @@ bool bucketSortPairs(std::vector<std::pair<F, int>>& v, bool ints_ascend) {
     bucket[i] = static_cast<std::uint32_t>(t < top ? t : top);
     ++start[bucket[i] + 1];
   }
-  for (std::size_t b = 0; b < n; ++b) {
-    if (start[b + 1] > 64) return false;
-    start[b + 1] += start[b];
+  // Bucket starts by a running sum held in a register (not reloaded from
+  // the entry just stored), any bucket over 64 noted on the way.
+  {
+    std::uint32_t acc = 0, over = 0;
+    for (std::size_t b = 1; b <= n; ++b) {
+      const std::uint32_t c = start[b];
+      over |= static_cast<std::uint32_t>(c > 64);
+      acc += c;
+      start[b] = acc;
+    }
+    if (over) return false;
   }
   std::vector<std::pair<F, int>> out(n);
   for (std::size_t i = 0; i < n; ++i) out[start[bucket[i]]++] = v[i];
