@@ -2,6 +2,8 @@
 // door_state_node --help, and the parameters launch/door_state.launch sets
 // (roslaunch --dump-params needs no master).
 #include <gtest/gtest.h>
+
+#include "run_command.hpp"
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -14,21 +16,10 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-  int code;
-  std::string out;
-};
+using Result = CommandResult;
 
 // Runs `cmd` through the shell; stdout only.
-Result shell(const std::string& cmd) {
-  FILE* p = popen((cmd + " 2>/dev/null </dev/null").c_str(), "r");
-  if (!p) return {-1, ""};
-  std::string out;
-  char buf[4096];
-  while (std::size_t n = fread(buf, 1, sizeof buf, p)) out.append(buf, n);
-  const int status = pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
+Result shell(const std::string& cmd) { return runCommand(cmd + " 2>/dev/null </dev/null"); }
 
 // door_state_node with ROS_MASTER_URI at a port nobody listens on, killed after 20 s.
 Result node(const std::string& args) {

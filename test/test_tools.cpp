@@ -3,6 +3,8 @@
 // is deterministic across runs.
 #include <gtest/gtest.h>
 
+#include "run_command.hpp"
+
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -24,20 +26,10 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-  int code;
-  std::string out;
-};
+using Result = CommandResult;
 
 Result run(const std::string& args, bool stderr_only = false) {
-  const std::string cmd = std::string(DSR_BIN_DIR) + "/" + args + (stderr_only ? " 2>&1 >/dev/null" : " 2>/dev/null");
-  FILE* p = popen(cmd.c_str(), "r");
-  if (!p) return {-1, ""};
-  std::string out;
-  char buf[4096];
-  while (std::size_t n = fread(buf, 1, sizeof buf, p)) out.append(buf, n);
-  const int status = pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+  return runCommand(std::string(DSR_BIN_DIR) + "/" + args + (stderr_only ? " 2>&1 >/dev/null" : " 2>/dev/null"));
 }
 
 std::string slurp(const fs::path& p) {

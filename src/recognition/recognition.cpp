@@ -1,6 +1,7 @@
 #include "door_state_recognition/recognition/recognition.hpp"
 #include "door_state_recognition/util/floor.hpp"
 #include "door_state_recognition/util/radix_sort.hpp"
+#include "door_state_recognition/util/both_halves.hpp"
 #include "door_state_recognition/util/first_error.hpp"
 
 #include <Eigen/Eigenvalues>
@@ -203,24 +204,6 @@ std::vector<SetBack> setBackPanels(const Points& points, const segmentation::Wal
 
 // Points of a cloud from which findDoorways reads them in two halves at once.
 constexpr std::size_t kSplitPoints = 20000;
-
-// f(0) and, when split, f(1) at once: f(1) as an OpenMP task (taken by a
-// thread of the enclosing parallel region when it comes free, or by this
-// one when it waits), f(0) here; outside a parallel region in turn. The
-// first exception thrown is rethrown here.
-template <class F>
-void bothHalves(bool split, const F& f) {
-  if (!split) {
-    f(0);
-    return;
-  }
-  util::FirstError error;
-#pragma omp task shared(error, f)
-  error.run([&] { f(1); });
-  error.run([&] { f(0); });
-#pragma omp taskwait
-  error.rethrow();
-}
 
 }  // namespace
 
@@ -430,7 +413,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     std::vector<double> head_fine_d;
     std::vector<std::pair<int, double>> face_d;  // (sub-column, offset) in point order
   } second;
-  bothHalves(half_at < points.size(), [&](int h) {
+  util::bothHalves(half_at < points.size(), [&](int h) {
     if (h == 0) {
       scan(0, half_at, grid.data(), front_diff.data(), head_fine.data(), head_fine_d.empty() ? nullptr : head_fine_d.data(), face_d_out.data(), face_d_n.data(), face_along, behind_face,
            [&](int col, double d) { face_d_sum[col] += d; });

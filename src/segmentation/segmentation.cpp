@@ -1,6 +1,7 @@
 #include "door_state_recognition/segmentation/segmentation.hpp"
 
 #include "door_state_recognition/preprocess/cell_map.hpp"
+#include "door_state_recognition/util/both_halves.hpp"
 #include "door_state_recognition/util/first_error.hpp"
 #include "door_state_recognition/util/radix_sort.hpp"
 
@@ -450,24 +451,6 @@ bool ViewTop::inView(const Eigen::Vector3f& q, float slack) const {
 namespace {
 // Lists of at least this many points are read in two halves at once by addWallSegments.
 constexpr std::size_t kSplitSegment = 10000;
-
-// f(0) and, when split, f(1) at once: f(1) as an OpenMP task (taken by a
-// thread of the enclosing parallel region when it comes free, or by this
-// one when it waits), f(0) here; outside a parallel region in turn. The
-// first exception thrown is rethrown here.
-template <class F>
-void bothHalves(bool split, const F& f) {
-  if (!split) {
-    f(0);
-    return;
-  }
-  util::FirstError error;
-#pragma omp task shared(error, f)
-  error.run([&] { f(1); });
-  error.run([&] { f(0); });
-#pragma omp taskwait
-  error.rethrow();
-}
 }  // namespace
 
 void addWallSegments(const Points& points, const std::vector<int>& inliers, const Eigen::Vector2d& point,
@@ -522,7 +505,7 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
   std::vector<std::pair<double, int>> along(inliers.size());
   {
     const std::size_t n = inliers.size(), mid = n >= kSplitSegment ? n / 2 : n;
-    bothHalves(mid < n, [&](int h) {
+    util::bothHalves(mid < n, [&](int h) {
       for (std::size_t k = h ? mid : 0, end = h ? n : mid; k < end; ++k) {
         const int i = inliers[k];
         along[k] = {(Eigen::Vector2d(points[i].x(), points[i].y()) - point).dot(direction), i};
@@ -565,7 +548,7 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
       // taken in): many inliers in two halves at once, each into bins of its own.
       std::vector<float> top(view->max_tan.size(), -std::numeric_limits<float>::infinity()), top_second;
       const std::size_t n = w.inliers.size(), mid = n >= kSplitSegment ? n / 2 : n;
-      bothHalves(mid < n, [&](int h) {
+      util::bothHalves(mid < n, [&](int h) {
         std::vector<float>& t = h ? top_second : top;
         if (h) t.assign(top.size(), -std::numeric_limits<float>::infinity());
         for (std::size_t k = h ? mid : 0, end = h ? n : mid; k < end; ++k) {
