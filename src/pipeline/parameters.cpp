@@ -126,7 +126,7 @@ void Parameters::validate() const {
   check(max_walls >= 1 && max_walls <= 1000, "max_walls", "in [1, 1000]");
   check(in(region_angle_deg, 0.1, 90), "region_angle_deg", "in [0.1, 90] deg");
   check(in(region_curvature, 0.0, 1.0), "region_curvature", "in [0, 1]");
-  check(min_region_points >= 3 && min_region_points <= 1000000, "min_region_points", "in [3, 1e6]");
+  check(min_region_points >= 3 && min_region_points <= 1000000, "min_region_points", "in [3, 1000000]");
   check(in(door_min_width, 0.1, 5) && in(door_max_width, door_min_width, 10), "door_min_width/door_max_width",
         "0.1 <= min <= max <= 10 m");
   check(in(door_min_height, 0.5, 5), "door_min_height", "in [0.5, 5] m");
@@ -145,7 +145,7 @@ void Parameters::validate() const {
         "0 <= closed_below <= open_from <= 180 deg");
   check(in(unseen_leaf_min_bound_deg, 0, 180), "unseen_leaf_min_bound_deg", "in [0, 180] deg");
   check(in(reconstruction_spacing, 0.002, 1.0), "reconstruction_spacing", "in [0.002, 1] m");
-  check(random_seed >= 0 && random_seed <= 1000000, "random_seed", "in [0, 1e6]");
+  check(random_seed >= 0 && random_seed <= 1000000, "random_seed", "in [0, 1000000]");
 }
 
 std::string dumpParameters(const Parameters& p) {

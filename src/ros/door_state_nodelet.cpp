@@ -221,7 +221,7 @@ std::vector<std::string> checkPrivateParameters(const ros::NodeHandle& pnh) {
     try {
       dsr::parseParameters(line, dsr::Parameters(), pname);
     } catch (const std::exception& e) {
-      problems.push_back(e.what());
+      problems.push_back(std::string(e.what()) + " (given " + yamlValue(v, 10) + ")");
       continue;
     }
     if (!in_cfg) {
