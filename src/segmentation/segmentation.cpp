@@ -642,10 +642,15 @@ std::size_t countInliersScalar(const float* x, const float* y, const float* nxs,
 // countInliersScalar four at a time on a CPU with AVX2: the same double
 // operations in each lane (AVX2 alone, no FMA: no multiply-add is fused),
 // the same count. The rest as countInliersScalar counts it.
-__attribute__((target("avx2"))) std::size_t countInliersAvx2(const float* x, const float* y, const float* nxs,
-                                                              const float* nys, std::size_t n, double qx, double qy,
-                                                              double nx, double ny, double wd, double agree) {
-  std::size_t count = 0, j = 0;
+// The inlier test of countInliersScalar on points [j, j + 4), for every
+// whole block of four of the n: on(j, bits), bit k set when point j + k is
+// an inlier. Returns where the blocks end (the rest is the scalar code's).
+template <class F>
+__attribute__((target("avx2"))) inline std::size_t inlierBlocksAvx2(const float* x, const float* y, const float* nxs,
+                                                                    const float* nys, std::size_t n, double qx,
+                                                                    double qy, double nx, double ny, double wd,
+                                                                    double agree, const F& on) {
+  std::size_t j = 0;
   const __m256d vqx = _mm256_set1_pd(qx), vqy = _mm256_set1_pd(qy), vnx = _mm256_set1_pd(nx), vny = _mm256_set1_pd(ny);
   const __m256d vwd = _mm256_set1_pd(wd), vag = _mm256_set1_pd(agree);
   const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL));
@@ -656,11 +661,21 @@ __attribute__((target("avx2"))) std::size_t countInliersAvx2(const float* x, con
     const __m256d dot = _mm256_add_pd(_mm256_mul_pd(vnx, pnx), _mm256_mul_pd(vny, pny));
     const __m256d in = _mm256_and_pd(_mm256_cmp_pd(_mm256_and_pd(dist, abs_mask), vwd, _CMP_LT_OQ),
                                      _mm256_cmp_pd(_mm256_and_pd(dot, abs_mask), vag, _CMP_GT_OQ));
-    count += static_cast<std::size_t>(__builtin_popcount(static_cast<unsigned>(_mm256_movemask_pd(in))));
+    on(j, static_cast<unsigned>(_mm256_movemask_pd(in)));
   }
   // Upper halves of the vector registers cleared before returning to SSE
   // code: left dirty, every SSE instruction after would wait on them.
   _mm256_zeroupper();
+  return j;
+}
+
+__attribute__((target("avx2"))) std::size_t countInliersAvx2(const float* x, const float* y, const float* nxs,
+                                                              const float* nys, std::size_t n, double qx, double qy,
+                                                              double nx, double ny, double wd, double agree) {
+  std::size_t count = 0;
+  const std::size_t j = inlierBlocksAvx2(x, y, nxs, nys, n, qx, qy, nx, ny, wd, agree, [&](std::size_t, unsigned bits) {
+    count += static_cast<std::size_t>(__builtin_popcount(bits));
+  });
   return count + countInliersScalar(x + j, y + j, nxs + j, nys + j, n - j, qx, qy, nx, ny, wd, agree);
 }
 #endif
@@ -689,26 +704,14 @@ __attribute__((target("avx2"))) void collectInliersAvx2(const float* x, const fl
                                                          const float* nys, const int* idx, std::size_t n, double qx,
                                                          double qy, double nx, double ny, double wd, double agree,
                                                          std::vector<int>& in, std::vector<Eigen::Vector2d>& q) {
-  std::size_t j = 0;
-  const __m256d vqx = _mm256_set1_pd(qx), vqy = _mm256_set1_pd(qy), vnx = _mm256_set1_pd(nx), vny = _mm256_set1_pd(ny);
-  const __m256d vwd = _mm256_set1_pd(wd), vag = _mm256_set1_pd(agree);
-  const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL));
-  for (; j + 4 <= n; j += 4) {
-    const __m256d px = _mm256_cvtps_pd(_mm_loadu_ps(&x[j])), py = _mm256_cvtps_pd(_mm_loadu_ps(&y[j]));
-    const __m256d pnx = _mm256_cvtps_pd(_mm_loadu_ps(&nxs[j])), pny = _mm256_cvtps_pd(_mm_loadu_ps(&nys[j]));
-    const __m256d dist = _mm256_add_pd(_mm256_mul_pd(_mm256_sub_pd(px, vqx), vnx), _mm256_mul_pd(_mm256_sub_pd(py, vqy), vny));
-    const __m256d dot = _mm256_add_pd(_mm256_mul_pd(vnx, pnx), _mm256_mul_pd(vny, pny));
-    const __m256d ok = _mm256_and_pd(_mm256_cmp_pd(_mm256_and_pd(dist, abs_mask), vwd, _CMP_LT_OQ),
-                                     _mm256_cmp_pd(_mm256_and_pd(dot, abs_mask), vag, _CMP_GT_OQ));
-    unsigned bits = static_cast<unsigned>(_mm256_movemask_pd(ok));
+  const std::size_t j = inlierBlocksAvx2(x, y, nxs, nys, n, qx, qy, nx, ny, wd, agree, [&](std::size_t b, unsigned bits) {
     while (bits) {
       const int k = __builtin_ctz(bits);
       bits &= bits - 1;
-      in.push_back(idx[j + k]);
-      q.emplace_back(static_cast<double>(x[j + k]), static_cast<double>(y[j + k]));
+      in.push_back(idx[b + k]);
+      q.emplace_back(static_cast<double>(x[b + k]), static_cast<double>(y[b + k]));
     }
-  }
-  _mm256_zeroupper();
+  });
   collectInliersScalar(x + j, y + j, nxs + j, nys + j, idx + j, n - j, qx, qy, nx, ny, wd, agree, in, q);
 }
 #endif

@@ -177,6 +177,16 @@ void expectMatchesTruth(const DoorStateArray& msg, const nlohmann::json& truth, 
   }
 }
 
+// Asks the nodelet's dynamic_reconfigure server to set one int parameter:
+// whether the call went through (the config in force comes back in srv's response).
+bool reconfigureInt(const std::string& name, int value, dynamic_reconfigure::Reconfigure& srv) {
+  dynamic_reconfigure::IntParameter p;
+  p.name = name;
+  p.value = value;
+  srv.request.config.ints.push_back(p);
+  return ros::service::call("/door_state/set_parameters", srv);
+}
+
 }  // namespace
 
 TEST_F(NodeletTest, SubscribesOnlyWhileSomeoneListens) {
@@ -428,11 +438,7 @@ TEST_F(NodeletTest, ACloudAboveMaxPointsIsRefused) {
   listen();
   auto set = [&](int max_points) {
     dynamic_reconfigure::Reconfigure srv;
-    dynamic_reconfigure::IntParameter p;
-    p.name = "max_points";
-    p.value = max_points;
-    srv.request.config.ints.push_back(p);
-    return ros::service::call("/door_state/set_parameters", srv);
+    return reconfigureInt("max_points", max_points, srv);
   };
   const auto before = diagnostics(ros::WallTime::now());
   ASSERT_TRUE(set(1000));
@@ -639,11 +645,7 @@ TEST_F(NodeletTest, AReconfigureRequestClampedToTheCfgRangeIsLogged) {
   ros::WallDuration(1.0).sleep();  // the subscription to /rosout
   auto set = [&](int normal_k) {
     dynamic_reconfigure::Reconfigure srv;
-    dynamic_reconfigure::IntParameter p;
-    p.name = "normal_k";
-    p.value = normal_k;
-    srv.request.config.ints.push_back(p);
-    EXPECT_TRUE(ros::service::call("/door_state/set_parameters", srv));
+    EXPECT_TRUE(reconfigureInt("normal_k", normal_k, srv));
     for (const auto& i : srv.response.config.ints)
       if (i.name == "normal_k") return i.value;
     return -1;
