@@ -48,7 +48,8 @@ and the first --rgbd-door-frames RGB-D frames from seed 1000 on with a door in
 view (where the leaf search works). Per stage: median of --runs runs (over
 every run of every frame for the frames with a door); peak RSS of each implementation in a child
 process of its own; door accuracy of both against the simulator's truth, on
-the timed scenes and on --accuracy-scenes more rooms of --accuracy-points.
+the timed scenes and on --accuracy-scenes more rooms of --accuracy-points,
+with a line for every one of those scenes where the two score differently.
 
 options:
   --runs R                  repetitions per case (default 5; env BENCH_RUNS is read by make bench)
@@ -324,6 +325,7 @@ json measure(const Case& c, const std::string& impl, int runs) {
 // Accuracy only: both implementations on K extra scenes, one run each.
 json accuracySweep(const std::string& sensor, int scenes, std::size_t points) {
   std::vector<eval::EvalResult> ours, stock;
+  json differ = json::array();  // the scenes where the two score differently
   double ours_ms = 0, stock_ms = 0;
   for (int k = 0; k < scenes; ++k) {
     const Case c{sensor, points, static_cast<std::uint64_t>(1000 + k), {}, false};
@@ -335,6 +337,14 @@ json accuracySweep(const std::string& sensor, int scenes, std::size_t points) {
     stock_ms += b.timing_ms.back().second;
     ours.push_back(eval::evaluate(s.truth, io::reportJson(a, "sweep"), 0.5, true));
     stock.push_back(eval::evaluate(s.truth, io::reportJson(b, "sweep"), 0.5, true));
+    const eval::EvalResult &o = ours.back(), &t = stock.back();
+    if (o.matched != t.matched || o.reported_doors != t.reported_doors || o.state_correct != t.state_correct)
+      differ.push_back({{"seed", c.seed},
+                        {"true_doors", o.true_doors},
+                        {"ours", {{"matched", o.matched}, {"reported", o.reported_doors}, {"state_correct", o.state_correct},
+                                  {"missed_truth", o.missed_truth}}},
+                        {"stock", {{"matched", t.matched}, {"reported", t.reported_doors}, {"state_correct", t.state_correct},
+                                   {"missed_truth", t.missed_truth}}}});
   }
   return {{"sensor", sensor},
           {"scenes", scenes},
@@ -342,6 +352,7 @@ json accuracySweep(const std::string& sensor, int scenes, std::size_t points) {
           {"points", sensor == "tls" ? json(points) : json(640 * 480)},
           {"ours", scoreJson(eval::merge(ours))},
           {"stock", scoreJson(eval::merge(stock))},
+          {"differ", differ},
           {"ours_mean_total_ms", ours_ms / std::max(1, scenes)},
           {"stock_mean_total_ms", stock_ms / std::max(1, scenes)}};
 }
@@ -600,6 +611,17 @@ int main(int argc, char** argv) {
                   sensor == "tls" ? (", " + std::to_string(opt.accuracy_points) + " rays").c_str() : "");
       std::printf("  ours  (mean %6.0f ms): %s\n", sw["ours_mean_total_ms"].get<double>(), fmtAcc(sw["ours"]).c_str());
       std::printf("  stock (mean %6.0f ms): %s\n", sw["stock_mean_total_ms"].get<double>(), fmtAcc(sw["stock"]).c_str());
+      for (const json& d : sw["differ"]) {
+        auto side = [](const json& x) {
+          std::string m;
+          for (const json& i : x["missed_truth"]) m += (m.empty() ? "" : ",") + std::to_string(i.get<int>());
+          return std::to_string(x["matched"].get<int>()) + " found, " + std::to_string(x["reported"].get<int>()) +
+                 " reported, " + std::to_string(x["state_correct"].get<int>()) + " states right" +
+                 (m.empty() ? "" : ", missed truth door " + m);
+        };
+        std::printf("    seed %d (%d doors): ours %s; stock %s\n", d["seed"].get<int>(), d["true_doors"].get<int>(),
+                    side(d["ours"]).c_str(), side(d["stock"]).c_str());
+      }
       sweeps.push_back(sw);
     }
   }

@@ -3,10 +3,14 @@
 # PointCloud2 published (stamped at publish time) to the DoorStateArray that
 # answers it, for simulated clouds played at a fixed rate from a rosbag.
 #
-#   scripts/nodelet_latency.sh [CASE ...]     (default: rgbd30 tls30 rgbd2 tls05 unload)
+#   scripts/nodelet_latency.sh [CASE ...]     (default: rgbd30 rgbddoor30 tls30 rgbd2 tls05 unload)
 #
 # Cases (clouds from door_scene_sim, seed 7, bags cached in $DSR_BUILD/latency):
-#   rgbd30  one 640x480 RGB-D frame at 30 Hz (a camera's rate: overload)
+#   rgbd30  one 640x480 RGB-D frame at 30 Hz (a camera's rate: overload);
+#           seed 7's frame, no door in view
+#   rgbddoor30  the RGB-D frame of seed 1001 at 30 Hz: a semi-open door in
+#           view, the slowest of the bench's five door frames (the leaf
+#           search runs on every cloud)
 #   tls30   a 400k-ray laser scan at 30 Hz (overload)
 #   rgbd2   the RGB-D frame at 2 Hz (no overload: latency of one cloud)
 #   tls05   the laser scan at 0.5 Hz (no overload)
@@ -33,7 +37,7 @@ export ROS_LOG_DIR="$OUT/log"
 PORT="${LATENCY_ROS_PORT:-$((20000 + RANDOM % 20000))}"
 export ROS_MASTER_URI="http://localhost:$PORT"
 CASES=("$@")
-[ ${#CASES[@]} -gt 0 ] || CASES=(rgbd30 tls30 rgbd2 tls05 unload)
+[ ${#CASES[@]} -gt 0 ] || CASES=(rgbd30 rgbddoor30 tls30 rgbd2 tls05 unload)
 
 for exe in door_scene_sim door_state_latency; do
   [ -x "$BIN/$exe" ] || { echo "nodelet_latency: $BIN/$exe missing: run make build first" >&2; exit 2; }
@@ -45,6 +49,7 @@ bag() {  # bag PREFIX SIM-ARGS...: simulate once, reuse afterwards
 }
 bag "$OUT/tls400k" --seed 7 --points 400000
 bag "$OUT/rgbd" --sensor rgbd --seed 7
+bag "$OUT/rgbd1001" --sensor rgbd --seed 1001
 
 CORE="" MGR="" LOADER="" FAILED=0
 stop() {  # stop PID: SIGINT, then wait for it (only processes this script started)
@@ -134,12 +139,13 @@ echo "== nodelet latency, $(nproc) cores, cases: ${CASES[*]} (${SECS} s each, so
 for c in "${CASES[@]}"; do
   case "$c" in
     rgbd30) run rgbd30 30 "$SECS" -y "" "$OUT/rgbd.bag" ;;
+    rgbddoor30) run rgbddoor30 30 "$SECS" -y "" "$OUT/rgbd1001.bag" ;;
     tls30)  run tls30 30 "$SECS" +z "" "$OUT/tls400k.bag" ;;
     rgbd2)  run rgbd2 2 "$SECS" -y "" "$OUT/rgbd.bag" ;;
     tls05)  run tls05 0.5 "$SECS" +z "" "$OUT/tls400k.bag" ;;
     soak)   run "soak" 10 "${SOAK_SECONDS:-600}" +z map "$OUT/tls400k.bag" "$OUT/rgbd.bag" ;;
     unload) unload_under_load ;;
-    *) echo "nodelet_latency: unknown case '$c' (rgbd30 tls30 rgbd2 tls05 soak unload)" >&2; exit 2 ;;
+    *) echo "nodelet_latency: unknown case '$c' (rgbd30 rgbddoor30 tls30 rgbd2 tls05 soak unload)" >&2; exit 2 ;;
   esac
 done
 exit "$FAILED"

@@ -115,6 +115,7 @@ double quantile(std::vector<double> v, double q) {
 struct Answers {
   std::mutex m;
   std::map<ros::Time, double> latency_ms;  // stamp -> receipt minus stamp
+  std::map<ros::Time, std::size_t> doors;  // stamp -> doors in the answer
   ros::WallTime last_receipt;
   std::map<std::string, std::string> diag;  // the nodelet's last diagnostics
 };
@@ -163,6 +164,7 @@ int main(int argc, char** argv) {
         const ros::Time now = ros::Time::now();
         std::lock_guard<std::mutex> l(rx.m);
         rx.latency_ms[m->header.stamp] = (now - m->header.stamp).toSec() * 1e3;
+        rx.doors[m->header.stamp] = m->doors.size();
         rx.last_receipt = ros::WallTime::now();
       });
   ros::Subscriber diag_sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
@@ -244,11 +246,15 @@ int main(int argc, char** argv) {
 
   std::vector<double> lat;
   std::size_t answered = 0;
+  std::size_t doors_min = 0, doors_max = 0;  // doors per answer
   std::map<std::string, std::string> diag;
   {
     std::lock_guard<std::mutex> l(rx.m);
     for (const auto& [stamp, ms] : rx.latency_ms)
       if (published.count(stamp)) {
+        const std::size_t nd = rx.doors[stamp];
+        doors_min = answered ? std::min(doors_min, nd) : nd;
+        doors_max = answered ? std::max(doors_max, nd) : nd;
         ++answered;
         lat.push_back(ms);
       }
@@ -260,11 +266,11 @@ int main(int argc, char** argv) {
   std::snprintf(buf, sizeof buf,
                 "%s: %zu clouds (%zu points%s) published at %.1f Hz for %.1f s: %zu answered, %zu dropped "
                 "(%.0f %%), answers at %.2f Hz\n"
-                "  latency stamp->DoorStateArray ms: p50 %.0f  p90 %.0f  p99 %.0f  max %.0f\n"
+                "  latency stamp->DoorStateArray ms: p50 %.0f  p90 %.0f  p99 %.0f  max %.0f;  doors per answer %zu-%zu\n"
                 "  manager RSS MiB: start %.1f  warm %.1f  end %.1f  max %.1f  (end - warm %+.1f)\n",
                 name.c_str(), n, points, clouds.size() > 1 ? ", first bag cloud" : "", n / elapsed, elapsed, answered,
                 n - answered, n ? 100.0 * (n - answered) / n : 0.0, answered / elapsed, quantile(lat, 0.5),
-                quantile(lat, 0.9), quantile(lat, 0.99), quantile(lat, 1.0), rss_start, rss_warm, rss_end, rss_max,
+                quantile(lat, 0.9), quantile(lat, 0.99), quantile(lat, 1.0), doors_min, doors_max, rss_start, rss_warm, rss_end, rss_max,
                 rss_end - rss_warm);
   std::cout << buf;
   if (o.pid > 0 && rss_samples.size() >= 10) {
@@ -285,10 +291,13 @@ int main(int argc, char** argv) {
        << ", \"seconds\": " << elapsed << ", \"published\": " << n << ", \"answered\": " << answered
        << ", \"dropped\": " << (n - answered) << ", \"latency_ms\": {\"p50\": " << quantile(lat, 0.5)
        << ", \"p90\": " << quantile(lat, 0.9) << ", \"p99\": " << quantile(lat, 0.99) << ", \"max\": "
-       << quantile(lat, 1.0) << "}, \"rss_mib\": {\"start\": " << rss_start << ", \"warm\": " << rss_warm
+       << quantile(lat, 1.0) << "}, \"doors_per_answer\": {\"min\": " << doors_min << ", \"max\": " << doors_max
+       << "}, \"rss_mib\": {\"start\": " << rss_start << ", \"warm\": " << rss_warm
        << ", \"end\": " << rss_end << ", \"max\": " << rss_max << ", \"per_second\": [";
     for (std::size_t i = 0; i < rss_samples.size(); ++i) js << (i ? ", " : "") << rss_samples[i];
-    js << "]}, \"nodelet\": {\"received\": \""
+    js << "]}, \"latency_ms_in_stamp_order\": [";
+    for (std::size_t i = 0; i < lat.size(); ++i) js << (i ? ", " : "") << lat[i];
+    js << "], \"nodelet\": {\"received\": \""
        << d("clouds received") << "\", \"processed\": \"" << d("clouds processed") << "\", \"dropped_stale\": \""
        << d("clouds dropped (stale)") << "\"}}\n";
   }
