@@ -24,6 +24,12 @@
 # a free port, runs build/bin/door_state_latency, and stops what it started,
 # by PID. Seconds per case: LATENCY_SECONDS (default 30). Figures also go to
 # $DSR_BUILD/latency/<case>.json.
+# The manager runs with GOMP_SPINCOUNT=10000, as launch/door_state.launch
+# starts it (argument omp_spincount), unless GOMP_SPINCOUNT or
+# OMP_WAIT_POLICY is set in the environment: libgomp's default spin (300000,
+# about 3 ms) takes the cores from the threads that receive and deserialize
+# the clouds (laser 400k at 30 Hz: answers at 6.0 Hz and latency p50 341 ms
+# with it, 8.4 Hz and 250 ms with 10000, one run each, 2026-11-25).
 set -euo pipefail
 REPO="$(cd "$(dirname "$0")/.." && pwd)"
 BUILD="${DSR_BUILD:-$REPO/build}"
@@ -34,6 +40,7 @@ mkdir -p "$OUT"
 export PATH=/usr/bin:$PATH
 set +u; source "$BUILD/.ws/devel/setup.bash"; set -u
 export ROS_LOG_DIR="$OUT/log"
+if [ -z "${GOMP_SPINCOUNT:-}" ] && [ -z "${OMP_WAIT_POLICY:-}" ]; then export GOMP_SPINCOUNT=10000; fi
 PORT="${LATENCY_ROS_PORT:-$((20000 + RANDOM % 20000))}"
 export ROS_MASTER_URI="http://localhost:$PORT"
 CASES=("$@")
@@ -136,6 +143,7 @@ unload_under_load() {  # the nodelet unloaded while clouds stream in at 30 Hz an
 }
 
 echo "== nodelet latency, $(nproc) cores, cases: ${CASES[*]} (${SECS} s each, soak ${SOAK_SECONDS:-600} s); stamp at publish -> DoorStateArray received"
+echo "   manager environment: GOMP_SPINCOUNT=${GOMP_SPINCOUNT:-unset} OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-unset}"
 for c in "${CASES[@]}"; do
   case "$c" in
     rgbd30) run rgbd30 30 "$SECS" -y "" "$OUT/rgbd.bag" ;;
