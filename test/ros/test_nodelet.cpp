@@ -503,10 +503,24 @@ TEST_F(NodeletTest, ParametersChangeLiveThroughDynamicReconfigure) {
 // clouds instead of queueing them. A burst of clouds with distinct stamps,
 // published faster than one is processed: fewer answers than clouds, the
 // last cloud answered, answers in stamp order (never a stale one after a
-// newer one), and the drops counted in the diagnostics. In the tf suite the
-// burst waits in the tf filter for a transform that comes only after the
-// whole burst, so that every cloud of it is released at once: they must not
-// all be processed one after the other. No wall-clock limit is asserted.
+// newer one), each cloud processed answered once, and every cloud the
+// nodelet received but did not process counted in the diagnostics as a
+// stale drop. No wall-clock limit is asserted.
+//
+// Where the clouds are dropped depends on the suite. roscpp's subscription
+// queue (1) drops, uncounted, a cloud that arrives before the callback has
+// taken the one before it. In the direct suite processing starts with the
+// first cloud and takes both cores, and roscpp drops 1 or 2 of the 5 on
+// this machine kind (five bursts received 4, 3, 3, 3, 3), sometimes all
+// the stale ones: there only the accounting above is asserted (until
+// 2026-11-25 this test asked a stale drop of the nodelet's own in both
+// suites, and failed so: 600 601 604 answered, 3 received). In the tf
+// suite the clouds wait in the tf filter for a transform that comes only
+// after the whole burst, published 0.1 s apart (nothing is processed
+// meanwhile, so the callback keeps up; published at once, one of the five
+// was lost in each of three runs), and are then released at once: the
+// nodelet must process at most two of them (the first taken and the newest)
+// and drop and count the rest itself.
 TEST_F(NodeletTest, StaleCloudsAreDroppedUnderABurst) {
   if (g_mode != "direct" && g_mode != "tf") GTEST_SKIP();
   const int n = 5;  // no longer than the tf filter's queue (~tf_queue_size 5)
@@ -514,15 +528,21 @@ TEST_F(NodeletTest, StaleCloudsAreDroppedUnderABurst) {
   const SimScan scan = simulate("paper_house", 11);
   const std::string frame = g_mode == "tf" ? "late_sensor" : "tls_scanner";
   const sensor_msgs::PointCloud2 base = toMsg(scan.cloud, frame, 0.0);
+  const auto before = diagnostics(ros::WallTime::now());
+  ASSERT_TRUE(before.count("clouds received") && before.count("clouds processed") && before.count("clouds dropped (stale)"))
+      << "no cloud counters in the diagnostics";
   std::vector<sensor_msgs::PointCloud2::Ptr> burst;
   for (int k = 0; k < n; ++k) {
     burst.push_back(boost::make_shared<sensor_msgs::PointCloud2>(base));
     burst.back()->header.stamp = ros::Time(600.0 + k);
   }
-  for (const auto& m : burst) pub_.publish(m);
+  for (const auto& m : burst) {
+    pub_.publish(m);
+    if (g_mode == "tf") ros::WallDuration(0.1).sleep();
+  }
   tf2_ros::StaticTransformBroadcaster tfb;
   if (g_mode == "tf") {
-    ros::WallDuration(2.0).sleep();  // the whole burst waits in the tf filter
+    ros::WallDuration(1.5).sleep();  // the whole burst waits in the tf filter
     ASSERT_EQ(rx_.count(), 0u) << "a cloud was processed without its transform";
     geometry_msgs::TransformStamped t = tf2::eigenToTransform(scan.cloud.sensor_to_world);
     t.header.frame_id = "map";
@@ -549,19 +569,29 @@ TEST_F(NodeletTest, StaleCloudsAreDroppedUnderABurst) {
       EXPECT_EQ(d.doors.size(), 1u) << "a cloud of the burst was not processed right";
     }
   }
+  const auto diag = diagnostics(ros::WallTime::now());
+  auto delta = [&](const char* key) {
+    return diag.count(key) ? static_cast<long>(std::stoul(diag.at(key))) - static_cast<long>(std::stoul(before.at(key))) : -1L;
+  };
+  const long received = delta("clouds received"), processed = delta("clouds processed"),
+             stale = delta("clouds dropped (stale)");
   std::ostringstream seen;
   for (double s : stamps) seen << s << " ";
+  seen << "(received " << received << ", processed " << processed << ", dropped stale " << stale << ")";
   SCOPED_TRACE("answered stamps: " + seen.str());
   RecordProperty("answered_stamps", seen.str());
-  const auto diag = diagnostics(ros::WallTime::now());
   for (const auto& kv : diag) RecordProperty(kv.first, kv.second);
   ASSERT_FALSE(stamps.empty());
   EXPECT_LT(stamps.size(), static_cast<std::size_t>(n)) << "every cloud of the burst was processed: clouds are queued";
   EXPECT_EQ(stamps.back(), last.toSec()) << "a stale cloud was answered after the newest one";
   for (std::size_t i = 1; i < stamps.size(); ++i) EXPECT_LT(stamps[i - 1], stamps[i]) << "answers out of stamp order";
-  ASSERT_TRUE(diag.count("clouds dropped (stale)")) << "no drop counter in the diagnostics";
-  EXPECT_GE(std::stoul(diag.at("clouds dropped (stale)")), 1u);
-  EXPECT_GE(std::stoul(diag.at("clouds processed")), stamps.size());
+  EXPECT_EQ(processed, static_cast<long>(stamps.size())) << "a cloud processed was not answered, or answered twice";
+  EXPECT_EQ(stale, received - processed) << "a cloud received and not processed was not counted as a stale drop";
+  EXPECT_LE(received, n);
+  if (g_mode == "tf") {
+    EXPECT_GE(received, 3) << "fewer than 3 clouds of the burst reached the nodelet: its own dropping is untested";
+    EXPECT_LE(processed, 2) << "more than 2 clouds of a burst released at once were processed: clouds are queued";
+  }
 }
 
 // Issue 6: values the .cfg ranges let through but the pipeline refuses
