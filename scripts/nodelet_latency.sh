@@ -5,7 +5,7 @@
 #
 #   scripts/nodelet_latency.sh [CASE ...]     (default: rgbd30 rgbddoor30 tls30 rgbd2 tls05 unload)
 #
-# Cases (clouds from door_scene_sim, seed 7, bags cached in $DSR_BUILD/latency):
+# Cases (clouds from door_scene_sim, seed 7 unless named, bags cached in $DSR_BUILD/latency):
 #   rgbd30  one 640x480 RGB-D frame at 30 Hz (a camera's rate: overload);
 #           seed 7's frame, no door in view
 #   rgbddoor30  the RGB-D frame of seed 1001 at 30 Hz: a semi-open door in
