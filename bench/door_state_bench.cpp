@@ -31,6 +31,7 @@
 #include "door_state_recognition/sim/ground_truth.hpp"
 #include "door_state_recognition/sim/scene.hpp"
 #include "door_state_recognition/sim/sensors.hpp"
+#include "door_state_recognition/util/keep_freed_memory.hpp"
 #include "door_state_recognition/util/omp_spin.hpp"
 
 using json = nlohmann::json;
@@ -402,6 +403,7 @@ std::string ompWait() {
 
 int main(int argc, char** argv) {
   dsr::util::shortOmpSpin(argv);  // before anything else: the program may be run again
+  const std::string freed_memory = dsr::util::keepFreedMemory();
   Options opt;
   try {
     opt = parse(argc, argv);
@@ -443,7 +445,8 @@ int main(int argc, char** argv) {
                   {"mem_gb", std::round(sysconf(_SC_PHYS_PAGES) * double(sysconf(_SC_PAGESIZE)) / (1 << 30))},
                   {"kernel", shell("uname -r")},
                   {"loadavg_at_start", shell("cut -d' ' -f1-3 /proc/loadavg")},
-                  {"omp_wait", ompWait()}};
+                  {"omp_wait", ompWait()},
+                  {"freed_memory", freed_memory}};
   char date[64];
   const std::time_t now = std::time(nullptr);
   std::strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", std::gmtime(&now));
@@ -453,6 +456,7 @@ int main(int argc, char** argv) {
               static_cast<unsigned long long>(opt.seed));
   if (!opt.note.empty()) std::printf("%s\n", opt.note.c_str());
   std::printf("OpenMP threads wait: %s (util/omp_spin.hpp)\n", machine["omp_wait"].get<std::string>().c_str());
+  std::printf("freed memory: %s (util/keep_freed_memory.hpp)\n", freed_memory.c_str());
   std::printf("ours: dsr::Pipeline without reconstruction; stock: pcl::VoxelGrid, NormalEstimationOMP (all cores), "
               "iterative SACSegmentation (SACMODEL_PARALLEL_PLANE), RegionGrowing, MomentOfInertiaEstimation, "
               "BoundaryEstimation; doors on both by our findDoorways + fitLeaf\n");

@@ -24,7 +24,8 @@
 # a free port, runs build/bin/door_state_latency, and stops what it started,
 # by PID. Seconds per case: LATENCY_SECONDS (default 30). Figures also go to
 # $DSR_BUILD/latency/<case>.json.
-# The manager runs with GOMP_SPINCOUNT=10000, as launch/door_state.launch
+# The manager runs with GOMP_SPINCOUNT=10000 (and glibc malloc's
+# MALLOC_MMAP_THRESHOLD_ and MALLOC_TRIM_THRESHOLD_), as launch/door_state.launch
 # starts it (argument omp_spincount), unless GOMP_SPINCOUNT or
 # OMP_WAIT_POLICY is set in the environment: libgomp's default spin (300000,
 # about 3 ms) takes the cores from the threads that receive and deserialize
@@ -41,6 +42,10 @@ export PATH=/usr/bin:$PATH
 set +u; source "$BUILD/.ws/devel/setup.bash"; set -u
 export ROS_LOG_DIR="$OUT/log"
 if [ -z "${GOMP_SPINCOUNT:-}" ] && [ -z "${OMP_WAIT_POLICY:-}" ]; then export GOMP_SPINCOUNT=10000; fi
+# glibc malloc as door_state.launch sets it (util/keep_freed_memory.hpp), unless the environment sets it.
+if [ -z "${MALLOC_MMAP_THRESHOLD_:-}${MALLOC_TRIM_THRESHOLD_:-}${MALLOC_TOP_PAD_:-}${GLIBC_TUNABLES:-}" ]; then
+  export MALLOC_MMAP_THRESHOLD_=67108864 MALLOC_TRIM_THRESHOLD_=1073741824
+fi
 PORT="${LATENCY_ROS_PORT:-$((20000 + RANDOM % 20000))}"
 export ROS_MASTER_URI="http://localhost:$PORT"
 CASES=("$@")
@@ -143,7 +148,7 @@ unload_under_load() {  # the nodelet unloaded while clouds stream in at 30 Hz an
 }
 
 echo "== nodelet latency, $(nproc) cores, cases: ${CASES[*]} (${SECS} s each, soak ${SOAK_SECONDS:-600} s); stamp at publish -> DoorStateArray received"
-echo "   manager environment: GOMP_SPINCOUNT=${GOMP_SPINCOUNT:-unset} OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-unset}"
+echo "   manager environment: GOMP_SPINCOUNT=${GOMP_SPINCOUNT:-unset} OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-unset} MALLOC_MMAP_THRESHOLD_=${MALLOC_MMAP_THRESHOLD_:-unset} MALLOC_TRIM_THRESHOLD_=${MALLOC_TRIM_THRESHOLD_:-unset}"
 for c in "${CASES[@]}"; do
   case "$c" in
     rgbd30) run rgbd30 30 "$SECS" -y "" "$OUT/rgbd.bag" ;;

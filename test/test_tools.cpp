@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "run_command.hpp"
+#include "door_state_recognition/util/keep_freed_memory.hpp"
 
 #include <algorithm>
 #include <cstdio>
@@ -19,6 +20,7 @@
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
+#include <unistd.h>
 #include <tuple>
 #include <vector>
 
@@ -88,6 +90,42 @@ TEST(Tools, ToolsRunWithAShortOpenMpSpinUnlessTheEnvironmentSaysOtherwise) {
   const std::string passive = header("OMP_WAIT_POLICY=passive");
   EXPECT_NE(passive.find("GOMP_SPINCOUNT=unset, OMP_WAIT_POLICY=passive"), std::string::npos) << passive;
   fs::remove_all(dir);
+}
+
+// util::keepFreedMemory: a 40 MB block freed and asked for again is the same
+// memory, still holding what was written (by default glibc mmaps a block that
+// large and gives it back to the kernel when it is freed: the next one comes
+// zeroed from the kernel, faulted in again), unless the environment sets
+// malloc's thresholds itself. Each case in a child process of its own (the
+// setting is the process's); its exit code is 0 when the second block still
+// held the first one's bytes. (Page faults cannot tell: with transparent huge
+// pages a fresh 40 MB block takes only some 20.)
+TEST(Tools, FreedMemoryIsKeptForTheNextCloudUnlessTheEnvironmentSaysOtherwise) {
+  auto secondBlockIsTheFirstKept = [](bool keep, const char* env) {
+    const pid_t pid = fork();
+    if (pid == 0) {
+      for (const char* v : {"MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_", "MALLOC_TOP_PAD_", "GLIBC_TUNABLES"}) unsetenv(v);
+      if (env) setenv(env, "1", 1);  // read by keepFreedMemory only: glibc read its environment at start-up
+      if (keep) dsr::util::keepFreedMemory();
+      const std::size_t n = 40u << 20;
+      char* volatile a = static_cast<char*>(std::malloc(n));
+      if (!a) _exit(3);
+      for (std::size_t i = 4096; i < n; i += 4096) a[i] = 1;
+      std::free(a);
+      char* volatile b = static_cast<char*>(std::malloc(n));
+      if (!b) _exit(3);
+      std::size_t kept = 0;
+      for (std::size_t i = 4096; i < n; i += 4096) kept += b[i] == 1;
+      std::free(b);
+      _exit(kept == n / 4096 - 1 ? 0 : 1);
+    }
+    int status = 0;
+    waitpid(pid, &status, 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  };
+  EXPECT_EQ(secondBlockIsTheFirstKept(false, nullptr), 1) << "glibc's default kept the block: the test tells nothing";
+  EXPECT_EQ(secondBlockIsTheFirstKept(true, nullptr), 0) << "keepFreedMemory: the freed block was given back";
+  EXPECT_EQ(secondBlockIsTheFirstKept(true, "MALLOC_TRIM_THRESHOLD_"), 1) << "keepFreedMemory overrode the environment";
 }
 
 TEST(Tools, SimulatorWritesCloudTruthAndBagDeterministically) {

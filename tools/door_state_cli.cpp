@@ -18,6 +18,7 @@
 #include "door_state_recognition/io/cloud_reader.hpp"
 #include "door_state_recognition/io/report.hpp"
 #include "door_state_recognition/pipeline/pipeline.hpp"
+#include "door_state_recognition/util/keep_freed_memory.hpp"
 #include "door_state_recognition/util/omp_spin.hpp"
 
 namespace {
@@ -111,6 +112,7 @@ void writeReconstruction(const std::string& path, const pcl::PointCloud<pcl::Poi
 
 int main(int argc, char** argv) {
   dsr::util::shortOmpSpin(argv);  // before anything else: the program may be run again
+  dsr::util::keepFreedMemory();   // the stations of a survey, one after another
   std::string config, up, json_out, recon_out;
   std::vector<std::string> inputs;
   bool quiet = false, verbose = false;

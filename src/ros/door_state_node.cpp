@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <string>
 
+#include "door_state_recognition/util/keep_freed_memory.hpp"
 #include "door_state_recognition/util/omp_spin.hpp"
 
 namespace {
@@ -48,6 +49,7 @@ int main(int argc, char** argv) {
       return 2;
     }
   dsr::util::shortOmpSpin(argv);  // before anything else: the program may be run again
+  dsr::util::keepFreedMemory();   // a cloud after another: no pages given back and faulted in again
   ros::init(argc, argv, "door_state_node");
   nodelet::Loader loader;
   const nodelet::M_string remappings(ros::names::getRemappings());
