@@ -7,8 +7,9 @@
 // blocks up to 64 MiB taken from the heaps and heaps trimmed only beyond
 // 1 GiB, a run of the 400k-ray room faulted 476 pages instead of 1573
 // (perf stat -e page-faults, door_state_bench --runs 11 against --runs 1)
-// and took 38-39 ms instead of 54-55 (three alternating rounds, quiet
-// machine, README "Benchmarks"); RGB-D frames were unchanged. Resident
+// and took 37.3-43.6 ms instead of 56.0-56.6, the 4M-ray room 105-122 ms
+// instead of 207-236 (three alternating rounds, quiet machine, README
+// "Benchmarks"); RGB-D frames were unchanged within the noise. Resident
 // memory stays at the high-water mark of the largest cloud seen, which the
 // process reached anyway.
 //
