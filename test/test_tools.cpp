@@ -104,7 +104,7 @@ TEST(Tools, FreedMemoryIsKeptForTheNextCloudUnlessTheEnvironmentSaysOtherwise) {
   auto secondBlockIsTheFirstKept = [](bool keep, const char* env) {
     const pid_t pid = fork();
     if (pid == 0) {
-      for (const char* v : {"MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_", "MALLOC_TOP_PAD_", "GLIBC_TUNABLES"}) unsetenv(v);
+      for (const char* v : dsr::util::kMallocEnvironment) unsetenv(v);
       if (env) setenv(env, "1", 1);  // read by keepFreedMemory only: glibc read its environment at start-up
       if (keep) dsr::util::keepFreedMemory();
       const std::size_t n = 40u << 20;

@@ -30,13 +30,17 @@ namespace util {
 
 constexpr int kKeepMmapThreshold = 64 << 20;  // bytes
 constexpr int kKeepTrimThreshold = 1 << 30;   // bytes
+// The environment variables by which malloc is set at start-up: any of them
+// set, keepFreedMemory leaves malloc as they made it.
+constexpr const char* kMallocEnvironment[] = {"MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_", "MALLOC_TOP_PAD_",
+                                              "GLIBC_TUNABLES"};
 
 // First thing in main(): sets the two thresholds unless the environment
 // sets malloc's own (MALLOC_MMAP_THRESHOLD_, MALLOC_TRIM_THRESHOLD_,
 // MALLOC_TOP_PAD_ or GLIBC_TUNABLES, read by glibc at start-up). Returns
 // what is in force, for a program's header.
 inline std::string keepFreedMemory() {
-  for (const char* v : {"MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_", "MALLOC_TOP_PAD_", "GLIBC_TUNABLES"})
+  for (const char* v : kMallocEnvironment)
     if (std::getenv(v)) return std::string("as the environment sets (") + v + ")";
   if (mallopt(M_MMAP_THRESHOLD, kKeepMmapThreshold) != 1 || mallopt(M_TRIM_THRESHOLD, kKeepTrimThreshold) != 1)
     return "glibc's defaults (mallopt refused)";
