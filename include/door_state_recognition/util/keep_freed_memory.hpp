@@ -5,7 +5,7 @@
 // freed, are mmap'ed; the top of a heap is trimmed beyond twice that), and
 // the next cloud faults the same pages in again, zeroed by the kernel. With
 // blocks up to 64 MiB taken from the heaps and heaps trimmed only beyond
-// 1 GiB, a run of the 400k-ray room faulted 476 pages instead of 1573
+// 1 GiB, a run of the 400k-ray room faulted 199 pages instead of 1573
 // (perf stat -e page-faults, door_state_bench --runs 11 against --runs 1)
 // and took 37.3-43.6 ms instead of 56.0-56.6, the 4M-ray room 105-122 ms
 // instead of 207-236 (three alternating rounds, quiet machine, README
