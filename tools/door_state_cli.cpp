@@ -11,6 +11,7 @@
 #include <cstring>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,20 +19,30 @@
 #include "door_state_recognition/io/cloud_reader.hpp"
 #include "door_state_recognition/io/report.hpp"
 #include "door_state_recognition/pipeline/pipeline.hpp"
+#include "door_state_recognition/pipeline/sight.hpp"
 #include "door_state_recognition/util/keep_freed_memory.hpp"
 #include "door_state_recognition/util/omp_spin.hpp"
 
 namespace {
 
 const char* kUsage = R"(usage: door_state_cli [--config FILE.yaml] [--up +z|-z|+y|-y|+x|-x|auto]
-                      [--json OUT.json] [--reconstruction OUT.ply] [--quiet] [--verbose]
+                      [--viewpoint auto|header|none|X,Y,Z] [--json OUT.json] [--reconstruction OUT.ply] [--quiet] [--verbose]
                       INPUT [INPUT...]
 
 Finds the walls and doors in a point cloud and tells every door's state
 (closed, semi_open, open) and opening angle. INPUT is a PCD (ascii, binary,
-binary_compressed) or PLY (ascii, binary) file with at least x, y, z, taken
-to be seen from its VIEWPOINT (PCD header; the origin if none is given). The report (JSON, input frame, metres and
-degrees) goes to stdout, or to --json.
+binary_compressed) or PLY (ascii, binary) file with at least x, y, z. The
+report (JSON, input frame, metres and degrees) goes to stdout, or to --json.
+
+Free space is told by rays from where the sensor stood (--viewpoint). By
+default (auto) that is the PCD header's VIEWPOINT (the origin where there is
+none, and for a PLY) when it is credible for the cloud: an organized cloud,
+or one in which almost no point lies behind another surface seen from there,
+as for one sensor's scan. A registered room, stations merged into one cloud,
+a map or a mesh export is not: its stations are then inferred from the
+cloud's own surfaces (positions from which they are seen) and run as a
+survey. The report's "viewpoint" says which was used ([x, y, z], or null
+with the inferred "stations"), and "warnings" why.
 
 Several INPUTs are the stations of one survey: scans from several scanner
 positions, registered into one frame, each a PCD whose VIEWPOINT header says
@@ -39,11 +50,16 @@ where its scanner stood in that frame (a PLY has none: its station is taken
 at the origin). Each station is run alone, with rays from its own position,
 and the results merged: walls on one line joined, each door reported once,
 from the station that saw its leaf best. "input" in the report lists them
-joined by commas.
+joined by commas. With auto, a station whose VIEWPOINT is not credible makes
+the inputs one cloud without a viewpoint.
 
   --config FILE.yaml       parameters over the defaults (config/default.yaml lists them)
   --up AXIS                the cloud's up axis, or auto to estimate it (default +z;
                            -y for a camera optical frame)
+  --viewpoint WHERE        auto (default): the header's VIEWPOINT when credible, else none;
+                           header: each INPUT's VIEWPOINT as given; none: no viewpoint
+                           (stations inferred from the surfaces); X,Y,Z: the sensor's
+                           position in the cloud's frame (metres, one INPUT only)
   --json OUT.json          write the report there instead of stdout
   --reconstruction OUT.ply walls rebuilt with their doorways and leaves (label 1 wall, 2 leaf);
                            with no wall found, a valid PLY of 0 points
@@ -113,7 +129,8 @@ void writeReconstruction(const std::string& path, const pcl::PointCloud<pcl::Poi
 int main(int argc, char** argv) {
   dsr::util::shortOmpSpin(argv);  // before anything else: the program may be run again
   dsr::util::keepFreedMemory();   // the stations of a survey, one after another
-  std::string config, up, json_out, recon_out;
+  std::string config, up, json_out, recon_out, viewpoint_arg = "auto";
+  std::optional<Eigen::Vector3d> viewpoint_xyz;
   std::vector<std::string> inputs;
   bool quiet = false, verbose = false;
   try {
@@ -125,6 +142,21 @@ int main(int argc, char** argv) {
         return 0;
       } else if (a == "--config") config = value();
       else if (a == "--up") up = value();
+      else if (a == "--viewpoint") {
+        viewpoint_arg = value();
+        if (viewpoint_arg != "auto" && viewpoint_arg != "header" && viewpoint_arg != "none") {
+          std::vector<double> xyz;
+          std::size_t from = 0;
+          for (std::size_t comma; xyz.size() < 4; from = comma + 1) {
+            comma = viewpoint_arg.find(',', from);
+            xyz.push_back(dsr::tools::toDouble("--viewpoint", viewpoint_arg.substr(from, comma - from)));
+            if (comma == std::string::npos) break;
+          }
+          if (xyz.size() != 3)
+            throw UsageError("--viewpoint needs auto, header, none or X,Y,Z (three numbers), got '" + viewpoint_arg + "'");
+          viewpoint_xyz = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
+        }
+      }
       else if (a == "--json") json_out = value();
       else if (a == "--reconstruction") recon_out = value();
       else if (a == "--quiet") quiet = true;
@@ -134,6 +166,8 @@ int main(int argc, char** argv) {
       else inputs.push_back(a);
     }
     if (inputs.empty()) throw UsageError("INPUT is missing");
+    if (viewpoint_xyz && inputs.size() > 1)
+      throw UsageError("--viewpoint X,Y,Z is one position: with several INPUTs give auto, header or none");
   } catch (const UsageError& e) {
     std::cerr << "door_state_cli: " << e.what() << "\n\n" << kUsage;
     return 2;
@@ -163,13 +197,16 @@ int main(int argc, char** argv) {
       read_each_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_read).count());
     }
     const double read_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    // Each INPUT seen from its VIEWPOINT (PCD; the origin where none is given).
+    // Each INPUT seen from its VIEWPOINT (PCD; the origin where none is
+    // given), from --viewpoint X,Y,Z, or from no known position.
     std::string input = inputs[0];
     std::vector<dsr::Station> stations;
     for (std::size_t k = 0; k < clouds.size(); ++k) {
-      const Eigen::Vector3d vp = clouds[k].sensor_origin_.head<3>().cast<double>();
-      if (!vp.allFinite() || vp.cwiseAbs().maxCoeff() > params.max_abs_coordinate)
+      const Eigen::Vector3d vp = viewpoint_xyz ? *viewpoint_xyz : clouds[k].sensor_origin_.head<3>().cast<double>();
+      if (!vp.allFinite() || vp.cwiseAbs().maxCoeff() > params.max_abs_coordinate) {
+        if (viewpoint_xyz) throw std::invalid_argument("--viewpoint lies beyond max_abs_coordinate");
         throw dsr::io::CloudReadError(inputs[k] + ": VIEWPOINT lies beyond max_abs_coordinate or is not finite");
+      }
       stations.push_back({&clouds[k], vp});
       if (k > 0) input += "," + inputs[k];
     }
@@ -180,7 +217,31 @@ int main(int argc, char** argv) {
       if (!quiet && (clouds.size() > 1 || !vp.isZero()))
         std::cerr << "door_state_cli: station " << k << " at (" << vp.x() << ", " << vp.y() << ", " << vp.z() << ")\n";
     }
-    const dsr::PipelineResult result = pipeline.runStations(stations, !recon_out.empty());
+    std::vector<std::string> sight_notes;
+    bool without_viewpoint = viewpoint_arg == "none";
+    if (viewpoint_arg == "auto")
+      for (std::size_t k = 0; k < stations.size() && !without_viewpoint; ++k) {
+        const dsr::sight::ViewpointCheck check = dsr::sight::checkViewpoint(clouds[k], stations[k].viewpoint, params);
+        const Eigen::Vector3d& vp = stations[k].viewpoint;
+        char at[120];
+        std::snprintf(at, sizeof at, "(%.3g, %.3g, %.3g)", vp.x(), vp.y(), vp.z());
+        if (!check.credible) {
+          without_viewpoint = true;
+          sight_notes.push_back("viewpoint: " + inputs[k] + "'s VIEWPOINT " + at + " is not credible: " + check.reason +
+                                "; run without a viewpoint");
+        } else if (!quiet) {
+          std::cerr << "door_state_cli: viewpoint " << at << " of " << inputs[k] << " taken: " << check.reason << "\n";
+        }
+      }
+    // Without a viewpoint the inputs are one cloud.
+    pcl::PointCloud<pcl::PointXYZ> merged;
+    if (without_viewpoint && clouds.size() > 1) {
+      for (const auto& c : clouds) merged += c;
+      stations.assign(1, {&merged, Eigen::Vector3d::Zero()});
+    }
+    dsr::PipelineResult result = without_viewpoint ? pipeline.runWithoutViewpoint(*stations[0].cloud, !recon_out.empty())
+                                                   : pipeline.runStations(stations, !recon_out.empty());
+    result.warnings.insert(result.warnings.begin(), sight_notes.begin(), sight_notes.end());
     nlohmann::json report = dsr::io::reportJson(result, input);
     report["timing_ms"]["read"] = read_ms;
     // The reconstruction before the report: exit 0 always means both were written.

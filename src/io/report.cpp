@@ -23,6 +23,10 @@ nlohmann::json reportJson(const PipelineResult& r, const std::string& input) {
   j["points_in"] = r.points_in;
   j["points_used"] = r.points_used;
   j["up"] = vec(r.up);
+  // Where the rays came from: the viewpoint, or null (a survey's or inferred stations, listed).
+  j["viewpoint"] = r.viewpoint ? vec(*r.viewpoint) : nlohmann::json(nullptr);
+  j["stations"] = nlohmann::json::array();
+  for (const Eigen::Vector3d& s : r.stations) j["stations"].push_back(vec(s));
   j["floor"] = optional(r.floor);
   j["ceiling"] = optional(r.ceiling);
   j["walls"] = nlohmann::json::array();

@@ -75,6 +75,7 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   PipelineResult res;
   Stopwatch watch(&res.timing_ms);
   res.points_in = cloud.size();
+  res.viewpoint = viewpoint_in;
   const bool organized = cloud.height > 1;  // a camera frame: no return means nothing in range
 
   // --- preprocess: sanitise, downsample ---------------------------------------

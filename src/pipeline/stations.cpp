@@ -12,6 +12,7 @@
 
 #include "door_state_recognition/pipeline/pipeline.hpp"
 #include "door_state_recognition/pipeline/report_groups.hpp"
+#include "door_state_recognition/pipeline/sight.hpp"
 #include "door_state_recognition/preprocess/preprocess.hpp"
 #include "door_state_recognition/recognition/recognition.hpp"
 #include "door_state_recognition/reconstruction/reconstruction.hpp"
@@ -292,8 +293,43 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
     res.reconstruction = reconstruction::reconstruct(patches, openings, params_.reconstruction_spacing,
                                                      R.transpose().cast<float>());
   }
+  for (const Station& st : stations) res.stations.push_back(st.viewpoint);
   res.timing_ms.emplace_back("total",
                              std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  return res;
+}
+
+PipelineResult Pipeline::runWithoutViewpoint(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool with_reconstruction) const {
+  if (cloud.size() > static_cast<std::size_t>(params_.max_points))
+    throw std::invalid_argument("cloud of " + std::to_string(cloud.size()) + " points exceeds max_points (" +
+                                std::to_string(params_.max_points) + ")");
+  const auto t0 = std::chrono::steady_clock::now();
+  const sight::InferredStations inferred = sight::inferStations(cloud, params_);
+  const double sight_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  PipelineResult res;
+  if (inferred.viewpoints.empty()) {
+    res.points_in = cloud.size();
+    res.up = inferred.up;
+    res.warnings.push_back("no viewpoint, and no position inside the scanned space sees enough of the cloud "
+                           "(no enclosed free space, or too few points): no doors");
+  } else {
+    std::vector<Station> stations;
+    for (std::size_t k = 0; k < inferred.viewpoints.size(); ++k)
+      stations.push_back({&inferred.clouds[k], inferred.viewpoints[k]});
+    res = runStations(stations, with_reconstruction);
+    res.viewpoint.reset();
+    res.stations = inferred.viewpoints;
+    res.points_in = cloud.size();  // the stations' scans overlap
+    res.warnings.insert(res.warnings.begin(),
+                        "no viewpoint: free space told by rays from " + std::to_string(stations.size()) +
+                            " station(s) inferred from the cloud's surfaces");
+    if (inferred.unseen > cloud.size() / 20)
+      res.warnings.push_back(std::to_string(inferred.unseen) + " points seen from no inferred station were left out");
+  }
+  res.timing_ms.insert(res.timing_ms.begin(), inferred.timing_ms.begin(), inferred.timing_ms.end());
+  auto total = std::find_if(res.timing_ms.begin(), res.timing_ms.end(), [](const auto& kv) { return kv.first == "total"; });
+  if (total != res.timing_ms.end()) total->second += sight_ms;
+  else res.timing_ms.emplace_back("total", sight_ms);
   return res;
 }
 

@@ -74,6 +74,11 @@ struct PipelineResult {
   std::vector<SegmentResult> others;
   std::vector<std::pair<std::string, double>> timing_ms;  // stage -> ms, in order; "total" last
   std::vector<std::string> warnings;                       // e.g. "no ceiling in view"
+  // Where the rays that told free space came from: the one viewpoint of a
+  // run(), or none (a survey's several stations, or stations inferred from
+  // the cloud's surfaces by runWithoutViewpoint), listed in `stations`.
+  std::optional<Eigen::Vector3d> viewpoint;
+  std::vector<Eigen::Vector3d> stations;
   std::vector<std::string> trace;  // every wall and doorway candidate with the decision taken on it
   // Reconstruction: walls with doorways and leaves, input frame; label 1 wall, 2 leaf.
   pcl::PointCloud<pcl::PointXYZL> reconstruction;
@@ -113,6 +118,13 @@ class Pipeline {
   // std::invalid_argument for no station, a null cloud, a viewpoint not
   // finite or beyond max_abs_coordinate, or more than max_points in all.
   PipelineResult runStations(const std::vector<Station>& stations, bool with_reconstruction = true) const;
+
+  // A cloud whose viewpoint no one knows (a registered room, stations merged,
+  // a map, a mesh export): the stations are inferred from its own surfaces
+  // (sight::inferStations, src/pipeline/sight.cpp) and run as a survey. The
+  // result's `viewpoint` is empty and `stations` lists the inferred ones.
+  // Throws std::invalid_argument for a cloud above max_points.
+  PipelineResult runWithoutViewpoint(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool with_reconstruction = true) const;
 
  private:
   Parameters params_;

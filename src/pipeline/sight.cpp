@@ -1,0 +1,373 @@
+// Viewpoint credibility and stations inferred from geometry (sight.hpp).
+//
+// Both rest on one test: from a position o, is point x the first surface of
+// the cloud on the ray o -> x? The cloud, thinned to kOccluderVoxel, is cast
+// into a range sphere around o as small oriented disks (each thinned point
+// with its PCA normal, radius a little over the sampling spacing so that a
+// sparse surface stays closed): every angular bin keeps the nearest range at
+// which its ray meets a disk. A disk is met exactly where its plane is, so a
+// surface seen at a grazing angle does not hide itself; x is hidden when
+// the bin's nearest range is shorter than x's by more than the noise.
+#include "door_state_recognition/pipeline/sight.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "door_state_recognition/preprocess/preprocess.hpp"
+#include "door_state_recognition/segmentation/neighbour_grid.hpp"
+#include "door_state_recognition/segmentation/segmentation.hpp"
+
+namespace dsr {
+namespace sight {
+namespace {
+
+using Points = preprocess::Points;
+
+constexpr double kPi = 3.14159265358979323846;
+// Occluders: the cloud thinned to this (m); a room's surfaces then hold some
+// 10^4-10^5 disks.
+constexpr double kOccluderVoxel = 0.05;
+// Angular bin of the range sphere: 0.5 deg (4.4 cm at 5 m).
+constexpr double kBin = 0.5 * kPi / 180;
+// A point is behind a surface when it is farther than that surface's disk on
+// its ray by this much plus a share of its range (range noise of scanners and
+// the thickness of thinned surfaces: a leaf's two faces, 4 cm apart, are
+// not told apart; a wall's two faces, 10 cm or more, are).
+constexpr float kHiddenAbs = 0.05f, kHiddenRel = 0.01f;
+// Disks closer than this to the position are its own surroundings (a
+// tripod, the robot): they hide nothing.
+constexpr float kMinRange = 0.25f;
+
+struct Occluders {
+  Points p, n;    // thinned points and unit normals (zero: isolated)
+  float radius;   // disk radius
+};
+
+// Disks of the points `p` (thinned to `voxel`) with their normals.
+Occluders disks(Points p, double voxel, const Parameters& prm) {
+  Occluders o;
+  o.p = std::move(p);
+  o.radius = static_cast<float>(voxel);
+  if (o.p.size() < 20) return o;
+  const segmentation::NeighbourGrid grid(o.p, static_cast<float>(1.5 * voxel));
+  o.n = segmentation::estimateNormals(o.p, grid, prm.normal_k, Eigen::Vector3f::Zero()).n;
+  // Sampling spacing: the median distance to the nearest thinned neighbour
+  // over a sample (the voxel for dense clouds; a mesh export's vertex
+  // spacing when that is coarser).
+  std::vector<float> nearest;
+  std::vector<int> idx;
+  std::vector<float> d2;
+  const std::size_t stride = std::max<std::size_t>(1, o.p.size() / 2000);
+  for (std::size_t i = 0; i < o.p.size(); i += stride) {
+    grid.within(static_cast<int>(i), static_cast<float>(3 * voxel), idx, d2);
+    if (!d2.empty()) nearest.push_back(std::sqrt(*std::min_element(d2.begin(), d2.end())));
+  }
+  float spacing = static_cast<float>(voxel);
+  if (!nearest.empty()) {
+    std::nth_element(nearest.begin(), nearest.begin() + nearest.size() / 2, nearest.end());
+    spacing = std::max(spacing, nearest[nearest.size() / 2]);
+  }
+  o.radius = 0.9f * spacing;
+  return o;
+}
+
+Occluders occluders(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Parameters& prm) {
+  return disks(preprocess::sanitizeAndDownsample(cloud, prm.max_abs_coordinate, kOccluderVoxel), kOccluderVoxel, prm);
+}
+
+// Nearest range per angular bin around an origin, in a frame whose z is up
+// (any frame works; bins are finest at the horizon).
+// atan2 to within 1e-5 rad (a polynomial on [0, 1]; bins are 1e-2 rad).
+inline float fastAtan2(float y, float x) {
+  const float ax = std::abs(x), ay = std::abs(y), hi = std::max(ax, ay);
+  if (hi == 0) return 0;
+  const float a = std::min(ax, ay) / hi, s = a * a;
+  float r = ((-0.0464964749f * s + 0.15931422f) * s - 0.327622764f) * s * a + a;
+  if (ay > ax) r = 1.57079637f - r;
+  if (x < 0) r = 3.14159274f - r;
+  return y < 0 ? -r : r;
+}
+
+class RangeSphere {
+ public:
+  // Rows are even steps of sin(elevation) (no asin per point; as fine as
+  // `bin` at the horizon, coarser towards the poles), columns even steps of
+  // azimuth.
+  RangeSphere(const Eigen::Vector3f& origin, double bin)
+      : o_(origin), bin_(static_cast<float>(bin)),
+        na_(static_cast<int>(std::ceil(2 * kPi / bin))), ne_(static_cast<int>(std::ceil(2 / bin))),
+        z_(static_cast<std::size_t>(na_) * ne_, std::numeric_limits<float>::infinity()) {
+    // The ray through the middle of every bin, from two small tables.
+    cos_el_.resize(ne_);
+    sin_el_.resize(ne_);
+    for (int e = 0; e < ne_; ++e) {
+      const double z = std::min(1.0, (e + 0.5) * bin - 1);
+      cos_el_[e] = static_cast<float>(std::sqrt(std::max(0.0, 1 - z * z)));
+      sin_el_[e] = static_cast<float>(z);
+    }
+    cos_az_.resize(na_);
+    sin_az_.resize(na_);
+    for (int a = 0; a < na_; ++a) {
+      const double az = (a + 0.5) * bin - kPi;
+      cos_az_[a] = static_cast<float>(std::cos(az));
+      sin_az_[a] = static_cast<float>(std::sin(az));
+    }
+  }
+
+  void cast(const Occluders& occ) {
+    for (std::size_t i = 0; i < occ.p.size(); ++i) disk(occ.p[i], occ.n[i], occ.radius);
+  }
+
+  // Range of x's first surface along its ray (infinity: none).
+  float nearest(const Eigen::Vector3f& x) const {
+    const Eigen::Vector3f d = x - o_;
+    const float r = d.norm();
+    if (!(r > 1e-6f)) return std::numeric_limits<float>::infinity();
+    return z_[index(bins(d / r))];
+  }
+  bool hidden(const Eigen::Vector3f& x) const {
+    const float r = (x - o_).norm();
+    return nearest(x) < r - (kHiddenAbs + kHiddenRel * r);
+  }
+  // Share of azimuth sectors (of 10 deg) in which some ray within 25 deg of
+  // the horizon meets a surface: a position enclosed by walls sees them all
+  // around; one outside a room sees its walls on one side only.
+  double enclosure() const {
+    const int sectors = 36, band = static_cast<int>(std::sin(25 * kPi / 180) / bin_);
+    int hit = 0;
+    for (int s = 0; s < sectors; ++s) {
+      bool any = false;
+      const int a0 = s * na_ / sectors, a1 = (s + 1) * na_ / sectors;
+      for (int e = ne_ / 2 - band; e <= ne_ / 2 + band && !any; ++e)
+        for (int a = a0; a < a1 && !any; ++a) any = std::isfinite(z_[static_cast<std::size_t>(e) * na_ + a]);
+      hit += any;
+    }
+    return static_cast<double>(hit) / sectors;
+  }
+
+ private:
+  std::pair<int, int> bins(const Eigen::Vector3f& u) const {
+    const float az = fastAtan2(u.y(), u.x());
+    int a = static_cast<int>(std::floor((az + static_cast<float>(kPi)) / bin_));
+    int e = static_cast<int>(std::floor((u.z() + 1) / bin_));
+    a = ((a % na_) + na_) % na_;
+    e = std::clamp(e, 0, ne_ - 1);
+    return {a, e};
+  }
+  std::size_t index(std::pair<int, int> ae) const { return static_cast<std::size_t>(ae.second) * na_ + ae.first; }
+
+  void disk(const Eigen::Vector3f& q, const Eigen::Vector3f& n, float radius) {
+    const Eigen::Vector3f d = q - o_;
+    const float r = d.norm();
+    if (r < kMinRange) return;
+    const Eigen::Vector3f u = d / r;
+    const auto [a0, e0] = bins(u);
+    const float alpha = std::atan(radius / r);
+    const float cos_el = std::sqrt(std::max(0.0f, 1 - u.z() * u.z()));
+    // Rows the disk spans: d(sin el) = cos el d(el), plus the curvature near a pole.
+    const int ke = static_cast<int>(std::ceil((alpha * cos_el + alpha * alpha) / bin_)) + 1;
+    const int ka = std::min(na_ / 2, static_cast<int>(std::ceil(alpha / (bin_ * std::max(cos_el, 0.02f)))));
+    const bool oriented = n.squaredNorm() > 0.5f;
+    for (int de = -ke; de <= ke; ++de) {
+      const int e = e0 + de;
+      if (e < 0 || e >= ne_) continue;
+      const float ce = cos_el_[e], se = sin_el_[e];
+      for (int da = -ka; da <= ka; ++da) {
+        const int a = ((a0 + da) % na_ + na_) % na_;
+        const Eigen::Vector3f ray(ce * cos_az_[a], ce * sin_az_[a], se);
+        float t = r;
+        if (oriented) {
+          const float dn = ray.dot(n);
+          if (std::abs(dn) < 0.05f) continue;  // edge-on: the disk covers no area of this bin
+          t = d.dot(n) / dn;
+          if (!(t > 0) || (ray * t - d).squaredNorm() > radius * radius) continue;
+        } else if ((ray * r - d).squaredNorm() > radius * radius) {
+          continue;
+        }
+        float& z = z_[static_cast<std::size_t>(e) * na_ + a];
+        z = std::min(z, t);
+      }
+    }
+  }
+
+  Eigen::Vector3f o_;
+  float bin_;
+  int na_, ne_;
+  std::vector<float> z_;
+  std::vector<float> cos_el_, sin_el_, cos_az_, sin_az_;
+};
+
+}  // namespace
+
+ViewpointCheck checkViewpoint(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vector3d& viewpoint,
+                              const Parameters& p) {
+  ViewpointCheck c;
+  if (cloud.height > 1) {
+    c.credible = true;
+    c.reason = "organized cloud: one sensor's frame, seen from its viewpoint";
+    return c;
+  }
+  const Occluders occ = occluders(cloud, p);
+  if (occ.p.size() < 20) {
+    c.credible = true;
+    c.reason = "too few points to test the viewpoint; taken as given";
+    return c;
+  }
+  RangeSphere sphere(viewpoint.cast<float>(), kBin);
+  sphere.cast(occ);
+  std::size_t hidden = 0;
+  for (const auto& x : occ.p) hidden += sphere.hidden(x);
+  c.tested = occ.p.size();
+  c.hidden_share = static_cast<double>(hidden) / static_cast<double>(c.tested);
+  c.credible = c.hidden_share <= kMaxHiddenShare;
+  char buf[200];
+  std::snprintf(buf, sizeof buf, "%.1f %% of the points lie behind other surfaces seen from it (a single scan: <= %.0f %%)",
+                100 * c.hidden_share, 100 * kMaxHiddenShare);
+  c.reason = buf;
+  return c;
+}
+
+InferredStations inferStations(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Parameters& p) {
+  InferredStations out;
+  auto t_last = std::chrono::steady_clock::now();
+  auto mark = [&](const char* stage) {
+    const auto now = std::chrono::steady_clock::now();
+    out.timing_ms.emplace_back(stage, std::chrono::duration<double, std::milli>(now - t_last).count());
+    t_last = now;
+  };
+  const Occluders occ = occluders(cloud, p);
+  mark("sight_disks");
+  if (occ.p.size() < 50) return out;
+
+  // Up: given, or estimated as the pipeline does; positions are placed in
+  // the levelled frame.
+  std::optional<Eigen::Vector3d> up = preprocess::parseUpAxis(p.up_axis);
+  if (!up) up = preprocess::estimateUp(occ.p, occ.n, static_cast<unsigned>(p.random_seed));
+  if (!up) up = Eigen::Vector3d::UnitZ();
+  out.up = up->normalized();
+  const Eigen::Matrix3f R = preprocess::levellingRotation(out.up).cast<float>();
+  Occluders lev = occ;
+  for (std::size_t i = 0; i < lev.p.size(); ++i) {
+    lev.p[i] = R * lev.p[i];
+    lev.n[i] = R * lev.n[i];
+  }
+
+  // Extent: robust percentiles (a few stray points do not stretch it).
+  auto percentile = [&](int axis, double q) {
+    std::vector<float> v;
+    v.reserve(lev.p.size());
+    for (const auto& x : lev.p) v.push_back(x(axis));
+    const std::size_t k = std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())));
+    std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
+    return v[k];
+  };
+  const float x0 = percentile(0, 0.005), x1 = percentile(0, 0.995);
+  const float y0 = percentile(1, 0.005), y1 = percentile(1, 0.995);
+  const float z0 = percentile(2, 0.01), z1 = percentile(2, 0.99);
+  // A scanner's height: 1.3 m above the floor, or half the room where lower.
+  const float zs = z0 + std::min(1.3f, 0.5f * (z1 - z0));
+  // A horizontal grid of about 1 m, at most ~100 positions.
+  const double area = std::max(1e-3, static_cast<double>(x1 - x0) * (y1 - y0));
+  const float g = static_cast<float>(std::max(1.0, std::sqrt(area / 100)));
+  std::vector<Eigen::Vector3f> cand;
+  for (float x = x0 + g / 2; x < x1; x += g)
+    for (float y = y0 + g / 2; y < y1; y += g) cand.emplace_back(x, y, zs);
+
+  // Free positions only: nothing of the cloud within 0.3 m.
+  {
+    std::vector<Eigen::Vector3f> free;
+    for (const auto& c : cand) {
+      bool clear = true;
+      for (std::size_t i = 0; i < lev.p.size() && clear; ++i) clear = (lev.p[i] - c).squaredNorm() > 0.09f;
+      if (clear) free.push_back(c);
+    }
+    cand.swap(free);
+  }
+  mark("sight_candidates");
+  if (cand.empty()) return out;
+
+  // Score on a sample of the thinned points: which each position sees,
+  // against coarser disks (kScoreVoxel) in coarser bins.
+  constexpr double kScoreVoxel = 0.1;
+  const Occluders coarse = disks(preprocess::voxelDownsample(lev.p, kScoreVoxel), kScoreVoxel, p);
+  const std::size_t stride = std::max<std::size_t>(1, lev.p.size() / 20000);
+  std::vector<int> sample;
+  for (std::size_t i = 0; i < lev.p.size(); i += stride) sample.push_back(static_cast<int>(i));
+  std::vector<std::vector<char>> sees(cand.size());
+  std::vector<double> enclosed(cand.size(), 0);
+#pragma omp parallel for schedule(dynamic, 1)
+  for (long c = 0; c < static_cast<long>(cand.size()); ++c) {
+    RangeSphere sphere(cand[c], 4 * kBin);
+    sphere.cast(coarse);
+    enclosed[c] = sphere.enclosure();
+    sees[c].resize(sample.size());
+    for (std::size_t k = 0; k < sample.size(); ++k) sees[c][k] = !sphere.hidden(lev.p[sample[k]]);
+  }
+
+  mark("sight_score");
+  // Greedy cover: the position seeing most of what no chosen one sees, while
+  // it adds a station's worth (kMinGain of the sample) and stands enclosed.
+  constexpr double kMinEnclosure = 0.85, kMinGain = 0.08;
+  constexpr int kMaxStations = 6;
+  std::vector<char> covered(sample.size(), 0);
+  std::vector<std::size_t> chosen;
+  while (static_cast<int>(chosen.size()) < kMaxStations) {
+    std::size_t best = cand.size(), best_gain = 0;
+    for (std::size_t c = 0; c < cand.size(); ++c) {
+      if (enclosed[c] < kMinEnclosure) continue;
+      std::size_t gain = 0;
+      for (std::size_t k = 0; k < sample.size(); ++k) gain += sees[c][k] && !covered[k];
+      if (gain > best_gain) best_gain = gain, best = c;
+    }
+    if (best == cand.size() || static_cast<double>(best_gain) < kMinGain * static_cast<double>(sample.size())) break;
+    chosen.push_back(best);
+    for (std::size_t k = 0; k < sample.size(); ++k) covered[k] |= sees[best][k];
+  }
+  if (chosen.empty()) return out;
+
+  // Every input point to each chosen station that sees it (a point seen from
+  // two stations is in both scans, as in a survey).
+  const Eigen::Matrix3f Rt = R.transpose();
+  std::vector<RangeSphere> spheres;
+  for (std::size_t c : chosen) {
+    spheres.emplace_back(cand[c], kBin);
+    out.viewpoints.push_back((Rt * cand[c]).cast<double>());
+  }
+#pragma omp parallel for schedule(dynamic, 1)
+  for (long k = 0; k < static_cast<long>(spheres.size()); ++k) spheres[static_cast<std::size_t>(k)].cast(lev);
+  out.clouds.resize(chosen.size());
+  const float lim = static_cast<float>(p.max_abs_coordinate);
+  const long n = static_cast<long>(cloud.size());
+  // Bit s of seen_by[i]: station s sees point i (0: none, or not a point).
+  std::vector<std::uint8_t> seen_by(cloud.size(), 0);
+#pragma omp parallel for schedule(static, 4096)
+  for (long i = 0; i < n; ++i) {
+    const Eigen::Vector3f x = cloud.points[static_cast<std::size_t>(i)].getVector3fMap();
+    if (!x.allFinite() || x.cwiseAbs().maxCoeff() > lim) continue;
+    const Eigen::Vector3f xl = R * x;
+    std::uint8_t bits = 0;
+    for (std::size_t k = 0; k < spheres.size(); ++k)
+      if (!spheres[k].hidden(xl)) bits |= static_cast<std::uint8_t>(1u << k);
+    seen_by[static_cast<std::size_t>(i)] = bits ? bits : 0x80;
+  }
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const std::uint8_t bits = seen_by[i];
+    if (bits == 0x80) ++out.unseen;
+    if (bits & 0x80) continue;
+    for (std::size_t k = 0; k < spheres.size(); ++k)
+      if (bits & (1u << k)) out.clouds[k].push_back(cloud.points[i]);
+  }
+  mark("sight_assign");
+  for (auto& c : out.clouds) {
+    c.width = static_cast<std::uint32_t>(c.size());
+    c.height = 1;
+    c.is_dense = true;
+  }
+  return out;
+}
+
+}  // namespace sight
+}  // namespace dsr
