@@ -218,7 +218,8 @@ TEST(Tools, CliReportHasTheDocumentedShape) {
   const Result r = run("door_state_cli --quiet --reconstruction " + (dir / "rec.ply").string() + " " + (dir / "s.pcd").string());
   ASSERT_EQ(r.code, 0);
   const nlohmann::json j = nlohmann::json::parse(r.out);
-  for (const char* k : {"input", "points_in", "points_used", "up", "floor", "ceiling", "walls", "doors", "others", "timing_ms"})
+  for (const char* k : {"input", "points_in", "points_used", "up", "viewpoint", "stations", "floor", "ceiling", "walls",
+                        "doors", "others", "timing_ms", "warnings"})
     EXPECT_TRUE(j.contains(k)) << k;
   EXPECT_EQ(j["points_in"].get<int>() > 0, true);
   ASSERT_FALSE(j["walls"].empty());
@@ -266,6 +267,54 @@ TEST(Tools, CliTakesTheStationsOfASurveyEachFromItsViewpoint) {
   const Result bad = run("door_state_cli " + s0 + " " + (dir / "far.pcd").string(), true);
   EXPECT_EQ(bad.code, 2);
   EXPECT_NE(bad.out.find("VIEWPOINT"), std::string::npos) << bad.out;
+  fs::remove_all(dir);
+}
+
+// --viewpoint: auto takes a station's own VIEWPOINT and refuses the origin
+// of three stations merged (room 1001: a tenth of its points lie behind
+// other surfaces seen from the first station); header and X,Y,Z are taken
+// as given, none infers the stations; malformed values are usage errors.
+TEST(Tools, CliDecidesWhereItsRaysComeFrom) {
+  const fs::path dir = tempDir("viewpoint");
+  const std::string prefix = (dir / "s").string();
+  ASSERT_EQ(run("door_scene_sim --quiet --seed 1001 --viewpoints 3 --points 600000 --out " + prefix).code, 0);
+  const std::string merged = prefix + ".pcd", s1 = prefix + ".station1.pcd";
+  auto report = [&](const std::string& args) {
+    const Result r = run("door_state_cli --quiet " + args);
+    EXPECT_EQ(r.code, 0) << args;
+    return r.code == 0 ? nlohmann::json::parse(r.out) : nlohmann::json();
+  };
+  auto hasWarning = [](const nlohmann::json& j, const std::string& text) {
+    for (const auto& w : j["warnings"])
+      if (w.get<std::string>().find(text) != std::string::npos) return true;
+    return false;
+  };
+  const nlohmann::json a = report(merged);  // auto
+  EXPECT_TRUE(a["viewpoint"].is_null());
+  EXPECT_FALSE(a["stations"].empty());
+  EXPECT_TRUE(hasWarning(a, "not credible")) << a["warnings"];
+  EXPECT_FALSE(a["doors"].empty());
+  const nlohmann::json h = report("--viewpoint header " + merged);
+  ASSERT_TRUE(h["viewpoint"].is_array());
+  EXPECT_EQ(h["viewpoint"][0].get<double>(), 0.0);
+  const nlohmann::json one = report(s1);  // auto on one station's scan: its VIEWPOINT
+  ASSERT_TRUE(one["viewpoint"].is_array());
+  EXPECT_NE(one["viewpoint"][0].get<double>(), 0.0);
+  EXPECT_FALSE(hasWarning(one, "not credible"));
+  const nlohmann::json none = report("--viewpoint none " + s1);
+  EXPECT_TRUE(none["viewpoint"].is_null());
+  EXPECT_TRUE(hasWarning(none, "no viewpoint"));
+  const nlohmann::json given = report("--viewpoint 0.5,-0.25,0.1 " + merged);
+  ASSERT_TRUE(given["viewpoint"].is_array());
+  EXPECT_DOUBLE_EQ(given["viewpoint"][1].get<double>(), -0.25);
+  for (const std::string bad : {"1,2", "1,2,3,4", "abc", "nan,0,0", "1,,2", ""}) {
+    SCOPED_TRACE(bad);
+    EXPECT_EQ(run("door_state_cli --viewpoint '" + bad + "' " + merged).code, 2);
+  }
+  EXPECT_EQ(run("door_state_cli --viewpoint 1,2,3 " + s1 + " " + merged).code, 2);  // one position, two inputs
+  const Result far = run("door_state_cli --viewpoint 1e30,0,0 " + merged, true);
+  EXPECT_EQ(far.code, 2);
+  EXPECT_NE(far.out.find("max_abs_coordinate"), std::string::npos) << far.out;
   fs::remove_all(dir);
 }
 

@@ -29,7 +29,7 @@ inline double toDouble(const std::string& flag, const std::string& v) {
   } catch (...) {
     n = 0;
   }
-  if (n != v.size() || !std::isfinite(x)) throw UsageError(flag + " needs a number, got '" + v + "'");
+  if (v.empty() || n != v.size() || !std::isfinite(x)) throw UsageError(flag + " needs a number, got '" + v + "'");
   return x;
 }
 
@@ -41,7 +41,7 @@ inline long long toInt(const std::string& flag, const std::string& v) {
   } catch (...) {
     n = 0;
   }
-  if (n != v.size()) throw UsageError(flag + " needs an integer, got '" + v + "'");
+  if (v.empty() || n != v.size()) throw UsageError(flag + " needs an integer, got '" + v + "'");
   return x;
 }
 
