@@ -68,7 +68,7 @@ FurnitureSpec drawPiece(Rng& rng, const std::string& kind, int wall, double room
     f.depth = rng.uniform(0.4, 0.6);
     f.height = std::min(top, rng.uniform(1.8, 2.2));
   }
-  if (corridor) f.depth = std::min(f.depth, 0.4);
+  if (corridor) f.depth = std::min(f.depth, 0.35);
   return f;
 }
 
@@ -142,12 +142,13 @@ void addClutter(RoomSpec& r, std::uint64_t seed, bool corridor) {
   }
 
   // Beside every doorway (in the partition's walls too): on each side with
-  // probability 0.75, a piece 0-30 cm from the casing; where a leaf swings
-  // into the room over that side, beyond its swing instead (between doors).
+  // probability 0.75 (a corridor, kept passable: 0.25), a piece 0-30 cm from
+  // the casing; where a leaf swings into the room over that side, beyond its
+  // swing instead (between doors).
   const std::vector<DoorSpec> doors = r.doors;
   for (const DoorSpec& d : doors) {
     for (const int side : {-1, 1}) {
-      if (!rng.coin(0.75)) continue;
+      if (!rng.coin(corridor ? 0.25 : 0.75)) continue;
       FurnitureSpec f = drawPiece(rng, drawKind(rng, corridor), d.wall, r.height, corridor);
       const double edge = d.center + side * (d.width / 2 + r.casing_width);  // outer edge of the casing
       f.center = edge + side * (rng.uniform(0.005, 0.3) + f.width / 2);
@@ -158,8 +159,9 @@ void addClutter(RoomSpec& r, std::uint64_t seed, bool corridor) {
     }
   }
 
-  // Between doors and along the other walls: two to four more pieces.
-  const int more = rng.integer(2, 4);
+  // Between doors and along the other walls: two to four more pieces (a
+  // corridor: up to two).
+  const int more = corridor ? rng.integer(0, 2) : rng.integer(2, 4);
   int placed = 0;
   for (int attempt = 0; attempt < 80 && placed < more; ++attempt) {
     FurnitureSpec f = drawPiece(rng, drawKind(rng, corridor), rng.integer(0, walls - 1), r.height, corridor);
