@@ -76,7 +76,7 @@ def main():
     names = sys.argv[1:] or os.environ.get("EVAL_SWEEPS", "").split() or DEFAULT
     out = BUILD / "eval"
     out.mkdir(parents=True, exist_ok=True)
-    print("| sweep (30 scenes) | P | R | state | angle MAE (measured; bounds) | median hinge |")
+    print(f"| sweep ({os.environ.get('EVAL_SCENES', 30)} scenes) | P | R | state | angle MAE (measured; bounds) | median hinge |")
     print("|---|---|---|---|---|---|")
     for name in names:
         work = Path(tempfile.mkdtemp(prefix=f"dsr_eval_{name}_"))

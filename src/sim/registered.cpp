@@ -117,23 +117,28 @@ SimulatedCloud meshLike(const SimulatedCloud& in, const MeshLikeOptions& o) {
                                             std::to_string(pts.size()) + " for " + std::to_string(o.vertices) + ")");
   detail::Rng rng(o.seed ^ 0x3E5B11CEull);
 
-  // Holes: round patches around random points until the share is cut.
-  std::vector<char> alive(pts.size(), 1);
-  std::size_t lost = 0;
-  for (int patch = 0; patch < 2000 && lost < o.hole_fraction * pts.size(); ++patch) {
-    const Eigen::Vector3f c = pts[static_cast<std::size_t>(rng.uniform(0, 1) * pts.size()) % pts.size()];
-    const float r2 = static_cast<float>(std::pow(rng.uniform(0.08, 0.3), 2));
-    for (std::size_t i = 0; i < pts.size(); ++i)
-      if (alive[i] && (pts[i] - c).squaredNorm() < r2) {
-        alive[i] = 0;
-        ++lost;
-      }
-  }
-  std::vector<int> order;
-  for (std::size_t i = 0; i < pts.size(); ++i)
-    if (alive[i]) order.push_back(static_cast<int>(i));
+  std::vector<int> order(pts.size());
+  for (std::size_t i = 0; i < pts.size(); ++i) order[i] = static_cast<int>(i);
   for (std::size_t i = order.size(); i > 1; --i)  // Fisher-Yates with our own mapping
     std::swap(order[i - 1], order[static_cast<std::size_t>(rng.uniform(0, 1) * i) % i]);
+
+  // Holes: round patches (8-30 cm radius) centred uniformly over the surface
+  // (on a 10 cm Poisson-disk sample, not on the scan's uneven density) until
+  // that share of the sample is cut.
+  const std::vector<int> coarse = poissonDisk(pts, order, 0.1);
+  std::vector<char> alive(pts.size(), 1), coarse_alive(coarse.size(), 1);
+  std::size_t cut = 0;
+  for (int patch = 0; patch < 5000 && cut < o.hole_fraction * coarse.size(); ++patch) {
+    const Eigen::Vector3f c = pts[coarse[static_cast<std::size_t>(rng.uniform(0, 1) * coarse.size()) % coarse.size()]];
+    const float r2 = static_cast<float>(std::pow(rng.uniform(0.08, 0.3), 2));
+    for (std::size_t k = 0; k < coarse.size(); ++k)
+      if (coarse_alive[k] && (pts[coarse[k]] - c).squaredNorm() < r2) {
+        coarse_alive[k] = 0;
+        ++cut;
+      }
+    for (std::size_t i = 0; i < pts.size(); ++i) alive[i] = alive[i] && (pts[i] - c).squaredNorm() >= r2;
+  }
+  order.erase(std::remove_if(order.begin(), order.end(), [&](int i) { return !alive[i]; }), order.end());
 
   // Poisson-disk radius for the count: count ~ area / radius^2, refined.
   double radius = 0.04;

@@ -44,7 +44,7 @@ SimulatedCloud mergeStations(const Scene& scene, const SimulatedCloud& scan, con
 
 struct MeshLikeOptions {
   std::size_t vertices = 40000;  // about this many (within 2% when reachable)
-  double hole_fraction = 0.05;   // share of the points lost in round holes 16-60 cm across
+  double hole_fraction = 0.05;   // share of the surface lost in round holes 16-60 cm across
   double smoothing = 0.5;        // one Laplacian step toward the neighbours' mean (rounds corners)
   double noise = 0.002;          // Gaussian sigma added after smoothing, metres
   std::uint64_t seed = 1;
