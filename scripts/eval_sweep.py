@@ -5,7 +5,11 @@ the merged figures as JSON (plus one line per scene with --verbose).
 
   scripts/eval_sweep.py [--sensor tls|rgbd] [--scenes N] [--first-seed S]
                         [--points N] [--viewpoints K] [--beyond-doors] [--no-handles] [--up AXIS] [--config FILE] [--jobs J]
+                        [--merge] [--mesh-like N] [--clutter] [--partition] [--corridor]
                         [--verbose] [--out DIR]
+
+With --merge or --mesh-like the CLI gets the one merged cloud (VIEWPOINT 0 0 0,
+frame map), as a user holding a registered export would run it.
 """
 import argparse, json, os, subprocess, sys, tempfile
 from concurrent.futures import ThreadPoolExecutor
@@ -18,6 +22,10 @@ def one(args, seed, out):
     prefix = out / f"{args.sensor}_{seed}"
     sim = [str(BIN / "door_scene_sim"), "--quiet", "--sensor", args.sensor, "--seed", str(seed),
            "--out", str(prefix), "--formats", "pcd,json"] + (["--no-handles"] if args.no_handles else [])
+    sim += [f"--{k}" for k in ("clutter", "partition", "corridor") if getattr(args, k)]
+    merged = args.merge or args.mesh_like > 0
+    sim += ["--merge"] if args.merge else []
+    sim += ["--mesh-like", str(args.mesh_like)] if args.mesh_like > 0 else []
     if args.sensor == "tls":
         sim += ["--points", str(args.points), "--noise", str(args.noise), "--viewpoints", str(args.viewpoints)]
         sim += ["--beyond-doors"] if args.beyond_doors else []
@@ -29,7 +37,7 @@ def one(args, seed, out):
             stations = len(json.load(f)["sensor_origins"])
     else:
         stations = 1
-    inputs = [f"{prefix}.station{k}.pcd" for k in range(stations)] if stations > 1 else [f"{prefix}.pcd"]
+    inputs = [f"{prefix}.station{k}.pcd" for k in range(stations)] if stations > 1 and not merged else [f"{prefix}.pcd"]
     config = ["--config", args.config] if args.config else []
     subprocess.run([str(BIN / "door_state_cli"), "--quiet", "--up", up, "--json", f"{prefix}.report.json"] + config + inputs,
                    check=True)
@@ -49,14 +57,21 @@ def main():
     ap.add_argument("--beyond-doors", action="store_true",
                     help="TLS: one more station in the room behind each door (door_scene_sim --beyond-doors)")
     ap.add_argument("--no-handles", action="store_true", help="leaves without handles (door_scene_sim --no-handles)")
+    ap.add_argument("--merge", action="store_true",
+                    help="TLS: the stations merged into one cloud in frame map (door_scene_sim --merge), one CLI input")
+    ap.add_argument("--mesh-like", type=int, default=0, metavar="N",
+                    help="TLS: the merged cloud resampled as N mesh vertices (door_scene_sim --mesh-like N)")
+    ap.add_argument("--clutter", action="store_true", help="random rooms with clutter (door_scene_sim --clutter)")
+    ap.add_argument("--partition", action="store_true", help="random rooms with a bathroom (door_scene_sim --partition)")
+    ap.add_argument("--corridor", action="store_true", help="corridors (door_scene_sim --corridor)")
     ap.add_argument("--up", default=None)
     ap.add_argument("--config", default=None, help="parameters YAML passed to door_state_cli")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--verbose", action="store_true")
     ap.add_argument("--out", default=None)
     args = ap.parse_args()
-    if args.sensor != "tls" and (args.beyond_doors or args.viewpoints != 1):
-        ap.error("--beyond-doors and --viewpoints are for --sensor tls")
+    if args.sensor != "tls" and (args.beyond_doors or args.viewpoints != 1 or args.merge or args.mesh_like):
+        ap.error("--beyond-doors, --viewpoints, --merge and --mesh-like are for --sensor tls")
     out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="dsr_sweep_"))
     out.mkdir(parents=True, exist_ok=True)
     seeds = range(args.first_seed, args.first_seed + args.scenes)
@@ -82,7 +97,9 @@ def main():
                                      "angle_lower_bounds", "hinge_error_median_m"]}
     summary.update(sensor=args.sensor, first_seed=args.first_seed)
     if args.sensor == "tls":
-        summary.update(points=args.points, viewpoints=args.viewpoints, beyond_doors=args.beyond_doors)
+        summary.update(points=args.points, viewpoints=args.viewpoints, beyond_doors=args.beyond_doors,
+                       merge=args.merge, mesh_like=args.mesh_like)
+    summary.update({k: True for k in ("clutter", "partition", "corridor") if getattr(args, k)})
     print(json.dumps(summary, indent=1))
 
 if __name__ == "__main__":

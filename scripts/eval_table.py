@@ -16,6 +16,13 @@ beyond-400k-SEED (one station inside and one beyond each door, 400k rays in
 all); -nohandles- before the seed (leaves without handles, e.g.
 rgbd-nohandles-SEED); -bound5- before the seed (tls-400k-bound5-SEED, stations3-400k-bound5-SEED)
 runs with unseen_leaf_min_bound_deg 5.
+Registered clouds (issue 19; not in DEFAULT): merged2-400k-SEED and
+merged3-400k-SEED (2 or 3 stations, 400k rays in all, merged into ONE cloud in
+frame map with VIEWPOINT 0 0 0; the CLI gets that one file), mesh40k-SEED
+(3 stations merged, then resampled as 40k mesh-like vertices). -clutter-,
+-partition- or -corridor- before the seed give the random rooms those options
+(e.g. merged3-400k-clutter-SEED, tls-400k-clutter-SEED). EVAL_SCENES=N runs N
+scenes per sweep instead of 30.
 """
 import json, os, shutil, subprocess, sys, tempfile
 from pathlib import Path
@@ -41,12 +48,21 @@ def sweep_args(name, config_dir):
     seed = parts[-1]
     if parts[0] == "rgbd":
         args = ["--sensor", "rgbd", "--first-seed", seed]
+    elif parts[0] in ("merged2", "merged3"):  # stations merged into one cloud: the rays in total
+        args = ["--sensor", "tls", "--viewpoints", parts[0][-1], "--merge", "--points", str(RAYS[parts[1]]),
+                "--first-seed", seed]
+    elif parts[0].startswith("mesh"):  # mesh40k: 3 stations of 400k rays in all, merged, 40k vertices
+        args = ["--sensor", "tls", "--viewpoints", "3", "--points", "400000",
+                "--mesh-like", str(int(parts[0][len("mesh"):-1]) * 1000), "--first-seed", seed]
     elif parts[0] == "beyond":  # one station inside, one beyond each door: the rays in total
         args = ["--sensor", "tls", "--beyond-doors", "--points", str(RAYS[parts[1]]), "--first-seed", seed]
     else:
         stations = 1 if parts[0] == "tls" else int(parts[0][len("stations"):])
         args = ["--sensor", "tls", "--viewpoints", str(stations), "--points", str(RAYS[parts[1]] * stations),
                 "--first-seed", seed]
+    args += [f"--{k}" for k in ("clutter", "partition", "corridor") if k in parts]
+    if os.environ.get("EVAL_SCENES"):
+        args += ["--scenes", os.environ["EVAL_SCENES"]]
     if "nohandles" in parts:
         args += ["--no-handles"]
     if "bound5" in parts:
@@ -60,7 +76,7 @@ def main():
     names = sys.argv[1:] or os.environ.get("EVAL_SWEEPS", "").split() or DEFAULT
     out = BUILD / "eval"
     out.mkdir(parents=True, exist_ok=True)
-    print("| sweep (30 scenes) | P | R | state | angle MAE (measured; bounds) | median hinge |")
+    print(f"| sweep ({os.environ.get('EVAL_SCENES', 30)} scenes) | P | R | state | angle MAE (measured; bounds) | median hinge |")
     print("|---|---|---|---|---|---|")
     for name in names:
         work = Path(tempfile.mkdtemp(prefix=f"dsr_eval_{name}_"))

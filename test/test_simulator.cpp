@@ -6,7 +6,13 @@
 #include <algorithm>
 #include <cmath>
 
+#include <pcl/io/pcd_io.h>
+#include <pcl/kdtree/kdtree_flann.h>
+
+#include <cstdio>
+
 #include "door_state_recognition/sim/ground_truth.hpp"
+#include "door_state_recognition/sim/registered.hpp"
 #include "door_state_recognition/sim/scene.hpp"
 #include "door_state_recognition/sim/sensors.hpp"
 
@@ -379,5 +385,274 @@ TEST(GroundTruth, IsExpressedInTheCloudFrame) {
     const auto& oc = j["doors"][0]["opening_center"];
     EXPECT_NEAR(up.dot(Eigen::Vector3d(oc[0], oc[1], oc[2])), j["floor"].get<double>(), 1e-9);
     if (sensor == "tls") EXPECT_NEAR(up.z(), 1.0, 1e-12);
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Registered clouds, clutter, partitions and corridors (issues 19 and 21).
+
+namespace {
+
+RandomSceneOptions clutterOptions(bool partition, bool corridor) {
+  RandomSceneOptions o;
+  o.clutter = true;
+  o.partition = partition;
+  o.corridor = corridor;
+  return o;
+}
+
+// Distance in the floor plane from p to the footprint of box b.
+double footprintDistance(const Box& b, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d q = b.pose.inverse() * Eigen::Vector3d(p.x(), p.y(), b.pose.translation().z());
+  const Eigen::Vector3d out = (q.cwiseAbs() - b.half).cwiseMax(0.0);
+  return std::hypot(out.x(), out.y());
+}
+
+SimulatedCloud threeStationScan(const Scene& s, std::uint64_t seed, std::size_t points) {
+  TlsOptions o;
+  o.points = points;
+  o.viewpoints = 3;
+  o.seed = seed;
+  return scanTls(s, o);
+}
+
+}  // namespace
+
+TEST(Registered, MergedCloudHoldsEveryStationInAMapFrameWithViewpointZero) {
+  for (const std::uint64_t seed : {11u, 12u}) {
+    SCOPED_TRACE(seedTrace(seed));
+    const Scene s = buildScene(randomRoom(seed, clutterOptions(true, false)));
+    const SimulatedCloud scan = threeStationScan(s, seed, 60000);
+    const SimulatedCloud merged = mergeStations(s, scan, {MergedFrame::Map, seed});
+    EXPECT_EQ(merged.frame_id, "map");
+    ASSERT_EQ(merged.cloud.size(), scan.cloud.size());
+    ASSERT_EQ(merged.station, scan.station);
+    std::vector<int> per_station(3, 0);
+    for (std::size_t i = 0; i < merged.cloud.size(); ++i) {
+      ++per_station.at(merged.station[i]);
+      const Eigen::Vector3d a = merged.sensor_to_world * merged.cloud[i].getVector3fMap().cast<double>();
+      const Eigen::Vector3d b = scan.sensor_to_world * scan.cloud[i].getVector3fMap().cast<double>();
+      ASSERT_LT((a - b).norm(), 1e-4) << "point " << i;
+    }
+    for (int k = 0; k < 3; ++k) EXPECT_GT(per_station[k], 10000) << "station " << k;
+    // VIEWPOINT 0 0 0 through a PCD file; the frame's origin is no station.
+    const std::string path = ::testing::TempDir() + "merged_" + std::to_string(seed) + ".pcd";
+    ASSERT_EQ(pcl::io::savePCDFileBinary(path, merged.cloud), 0);
+    pcl::PointCloud<pcl::PointXYZL> back;
+    ASSERT_EQ(pcl::io::loadPCDFile(path, back), 0);
+    std::remove(path.c_str());
+    EXPECT_EQ(back.size(), merged.cloud.size());
+    EXPECT_EQ(back.sensor_origin_.head<3>().norm(), 0.0f);
+    for (const Eigen::Vector3d& v : merged.viewpoints_world)
+      EXPECT_GT((merged.sensor_to_world.inverse() * v).norm(), 1.0);
+    // The truth in the same frame: floor at z = 0, doors where the world has them.
+    const nlohmann::json j = groundTruthJson(s, merged);
+    EXPECT_EQ(j["frame_id"], "map");
+    EXPECT_NEAR(j["floor"].get<double>(), 0.0, 1e-9);
+    ASSERT_EQ(j["doors"].size(), s.doors.size());
+    for (std::size_t i = 0; i < s.doors.size(); ++i) {
+      const auto& oc = j["doors"][i]["opening_center"];
+      EXPECT_LT((merged.sensor_to_world * Eigen::Vector3d(oc[0], oc[1], oc[2]) - s.doors[i].opening_center).norm(), 1e-9);
+    }
+    // station0: the scan's own frame, VIEWPOINT zero there too.
+    const SimulatedCloud first = mergeStations(s, scan, {MergedFrame::Station0, seed});
+    EXPECT_EQ(first.frame_id, scan.frame_id);
+    EXPECT_EQ(first.cloud.sensor_origin_.head<3>().norm(), 0.0f);
+    EXPECT_EQ(first.cloud[100].x, scan.cloud[100].x);
+  }
+  EXPECT_THROW(mergedFrameFromString("world"), std::invalid_argument);
+}
+
+TEST(Registered, MeshLikeCloudHasTheCountSpacingHolesAndRoundedCorners) {
+  const std::uint64_t seed = 21;
+  SCOPED_TRACE(seedTrace(seed));
+  const Scene s = buildScene(randomRoom(seed, clutterOptions(false, false)));
+  const SimulatedCloud merged = mergeStations(s, threeStationScan(s, seed, 400000), {MergedFrame::Map, seed});
+  MeshLikeOptions o;
+  o.vertices = 40000;
+  o.seed = seed;
+  const SimulatedCloud mesh = meshLike(merged, o);
+  EXPECT_NEAR(static_cast<double>(mesh.cloud.size()), 40000.0, 4000.0);
+  EXPECT_EQ(mesh.station.size(), mesh.cloud.size());
+  EXPECT_EQ(mesh.cloud.sensor_origin_.head<3>().norm(), 0.0f);
+  const double spacing = medianSpacing(mesh.cloud);
+  EXPECT_GE(spacing, 0.02);
+  EXPECT_LE(spacing, 0.05);
+  // Poisson-disk vertices: few pairs much closer than the median (a voxel
+  // grid or the raw scan would have many); smoothing and noise move some.
+  pcl::KdTreeFLANN<pcl::PointXYZL> tree;
+  tree.setInputCloud(mesh.cloud.makeShared());
+  std::vector<int> idx(2);
+  std::vector<float> d2(2);
+  std::size_t close = 0;
+  for (const auto& p : mesh.cloud.points)
+    if (tree.nearestKSearch(p, 2, idx, d2) == 2 && std::sqrt(d2[1]) < 0.3 * spacing) ++close;
+  EXPECT_LT(close, mesh.cloud.size() / 50);
+  // Holes and rounded corners: vertices lie off the surfaces they were
+  // sampled from (pulled in at corners and thin parts), most of them barely.
+  pcl::KdTreeFLANN<pcl::PointXYZL> dense;
+  dense.setInputCloud(merged.cloud.makeShared());
+  std::vector<double> off;
+  for (const auto& p : mesh.cloud.points)
+    if (dense.nearestKSearch(p, 1, idx, d2) == 1) off.push_back(std::sqrt(d2[0]));
+  std::sort(off.begin(), off.end());
+  EXPECT_LT(off[off.size() / 2], 0.01);
+  EXPECT_GT(off[off.size() * 99 / 100], 0.01);
+  // The holes: with none cut, more of the room's surface has vertices near it.
+  o.hole_fraction = 0.0;
+  o.smoothing = 0.0;
+  o.noise = 0.0;
+  const SimulatedCloud whole = meshLike(merged, o);
+  pcl::KdTreeFLANN<pcl::PointXYZL> holed;
+  holed.setInputCloud(mesh.cloud.makeShared());
+  std::size_t uncovered = 0;
+  for (const auto& p : whole.cloud.points)
+    if (holed.nearestKSearch(p, 1, idx, d2) == 1 && std::sqrt(d2[0]) > 0.1) ++uncovered;
+  EXPECT_GT(uncovered, whole.cloud.size() / 100);
+  // Deterministic for a seed; bad counts refused.
+  o = MeshLikeOptions();
+  o.vertices = 40000;
+  o.seed = seed;
+  const SimulatedCloud again = meshLike(merged, o);
+  ASSERT_EQ(again.cloud.size(), mesh.cloud.size());
+  EXPECT_EQ(again.cloud[1234].x, mesh.cloud[1234].x);
+  o.vertices = 50;
+  EXPECT_THROW(meshLike(merged, o), std::invalid_argument);
+  o.vertices = merged.cloud.size();
+  EXPECT_THROW(meshLike(merged, o), std::invalid_argument);
+}
+
+TEST(Clutter, NeverInADoorwayOrALeafsSwingAndAgainstTheWalls) {
+  int beside_casing = 0, chairs = 0, shelving = 0, desks = 0, windows = 0;
+  for (std::uint64_t seed = 300; seed < 360; ++seed) {
+    SCOPED_TRACE(seedTrace(seed));
+    const bool partition = seed % 2 == 0, corridor = seed % 5 == 0;
+    const RoomSpec r = randomRoom(seed, clutterOptions(partition, corridor));
+    Scene s;
+    ASSERT_NO_THROW(s = buildScene(r));
+    windows += static_cast<int>(r.windows.size());
+    for (std::size_t i = 0; i < s.doors.size(); ++i) {
+      const DoorTruth& d = s.doors[i];
+      const WallTruth& w = s.walls[d.wall];
+      const double t = d.wall < 4 ? r.wall_thickness : r.partition->thickness;
+      for (const Box& b : s.boxes) {
+        if (b.surface != Surface::Furniture) continue;
+        // A leaf swinging into the room sweeps a disc of its width about the hinge.
+        if (d.swing_into_room) {
+          EXPECT_GE(footprintDistance(b, d.hinge), d.width - 0.01) << "door " << i;
+        }
+        // The doorway and the way through it (0.5 m into the room) stay empty.
+        for (double u = -0.5; u <= 0.5; u += 0.1)
+          for (double n = -t; n <= 0.5; n += 0.05)
+            for (double z = 0.05; z < d.height; z += 0.25) {
+              const Eigen::Vector3d p = d.opening_center + w.axis * (u * d.width) + w.normal * (n + t / 2) + Eigen::Vector3d::UnitZ() * z;
+              EXPECT_FALSE(b.contains(p)) << "door " << i << " at " << p.transpose();
+            }
+        for (const auto& c : boxCorners(leafOf(s, static_cast<int>(i)))) EXPECT_FALSE(b.contains(c)) << "door " << i;
+      }
+    }
+    // Pieces against a wall: their back 0.5-5 cm off its face, within its length.
+    for (std::size_t k = 0; k < r.furniture.size(); ++k) {
+      const FurnitureSpec& f = r.furniture[k];
+      chairs += f.kind == "chair";
+      shelving += f.kind == "bookcase" || f.kind == "shelf";
+      desks += f.kind == "desk";
+      if (f.kind == "chair" || f.kind == "table") continue;
+      const Eigen::Vector3d c = inWall(s, f.wall, s.decoys[k + r.windows.size()].center);
+      EXPECT_NEAR(c.y() - f.depth / 2, f.gap, 1e-9) << "piece " << k;
+      EXPECT_GE(f.gap, 0.0);
+      EXPECT_LE(f.gap, 0.05);
+      EXPECT_LE(std::abs(c.x()) + f.width / 2, s.walls[f.wall].length / 2 + 1e-9) << "piece " << k;
+      for (const DoorSpec& d : r.doors)
+        if (d.wall == f.wall) {
+          const double near_edge = std::abs(f.center - d.center) - f.width / 2 - d.width / 2 - r.casing_width;
+          beside_casing += near_edge >= 0.0 && near_edge <= 0.3;
+        }
+    }
+  }
+  // The generator does put pieces right beside doors, and of every kind.
+  EXPECT_GT(beside_casing, 30);
+  EXPECT_GT(chairs, 20);
+  EXPECT_GT(shelving, 40);
+  EXPECT_GT(desks, 10);
+  EXPECT_GT(windows, 20);
+}
+
+TEST(Clutter, PartitionDoorIsInTheTruthAndItsRoomNotFree) {
+  for (std::uint64_t seed = 400; seed < 420; ++seed) {
+    SCOPED_TRACE(seedTrace(seed));
+    RandomSceneOptions o;
+    o.partition = true;
+    const RoomSpec r = randomRoom(seed, o);
+    ASSERT_TRUE(r.partition.has_value());
+    const Scene s = buildScene(r);
+    ASSERT_EQ(s.walls.size(), 6u);
+    int inside = -1;
+    for (std::size_t i = 0; i < s.doors.size(); ++i)
+      if (s.doors[i].wall >= 4) inside = static_cast<int>(i);
+    ASSERT_GE(inside, 0);
+    const DoorTruth& d = s.doors[inside];
+    // On its partition wall: mid-thickness behind the wall's interior face.
+    const Eigen::Vector3d q = inWall(s, d.wall, d.opening_center);
+    EXPECT_NEAR(q.y(), -r.partition->thickness / 2, 1e-9);
+    EXPECT_LE(std::abs(q.x()) + d.width / 2, s.walls[d.wall].length / 2);
+    TlsOptions t;
+    t.points = 20000;
+    t.seed = seed;
+    const nlohmann::json j = groundTruthJson(s, scanTls(s, t));
+    EXPECT_EQ(j["doors"][inside]["wall"], d.wall);
+    EXPECT_EQ(j["walls"].size(), 6u);
+    // The small room's middle is not the scanned room's free space.
+    const Eigen::Vector2d sg((r.partition->corner == 1 || r.partition->corner == 2) ? 1 : -1, r.partition->corner >= 2 ? 1 : -1);
+    const Eigen::Vector3d mid(sg.x() * (r.width - r.partition->size_x) / 2, sg.y() * (r.depth - r.partition->size_y) / 2, 1.4);
+    EXPECT_FALSE(s.isFree(s.room_to_world * mid, 0.0));
+  }
+  // Walls 4 and 5 exist only with a partition; a window must not overlap a door.
+  RoomSpec r = oneDoorRoom(0, true, true, 0);
+  r.doors[0].wall = 4;
+  EXPECT_THROW(buildScene(r), std::invalid_argument);
+  r = oneDoorRoom(0, true, true, 0);
+  WindowSpec w;
+  w.wall = 1;
+  w.center = 0.5;
+  r.windows.push_back(w);
+  EXPECT_THROW(buildScene(r), std::invalid_argument);
+}
+
+TEST(Clutter, CorridorsAreLongAndNarrowWithDoorsAlongTheirSides) {
+  for (std::uint64_t seed = 500; seed < 520; ++seed) {
+    SCOPED_TRACE(seedTrace(seed));
+    RandomSceneOptions o;
+    o.corridor = true;
+    const RoomSpec r = randomRoom(seed, o);
+    EXPECT_GE(r.width, 6.0);
+    EXPECT_LE(r.width, 12.0);
+    EXPECT_GE(r.depth, 1.5);
+    EXPECT_LE(r.depth, 2.2);
+    EXPECT_GE(r.doors.size(), 2u);
+    for (const DoorSpec& d : r.doors) EXPECT_TRUE(d.wall == 0 || d.wall == 2);
+    EXPECT_NO_THROW(scanTls(buildScene(r), TlsOptions()));
+  }
+}
+
+TEST(Clutter, OptionsAreDeterministicAndLeaveThePlainRoomAlone) {
+  for (std::uint64_t seed = 600; seed < 610; ++seed) {
+    SCOPED_TRACE(seedTrace(seed));
+    const RandomSceneOptions o = clutterOptions(true, false);
+    const Scene a = buildScene(randomRoom(seed, o)), b = buildScene(randomRoom(seed, o));
+    ASSERT_EQ(a.boxes.size(), b.boxes.size());
+    for (std::size_t i = 0; i < a.boxes.size(); ++i) {
+      EXPECT_TRUE(a.boxes[i].pose.isApprox(b.boxes[i].pose, 0.0));
+      EXPECT_EQ(a.boxes[i].half, b.boxes[i].half);
+    }
+    // Without the options the room is as it was: same size, doors, furniture.
+    const RoomSpec plain = randomRoom(seed), flagged = randomRoom(seed, RandomSceneOptions());
+    EXPECT_EQ(plain.width, flagged.width);
+    EXPECT_EQ(plain.doors.size(), flagged.doors.size());
+    const RoomSpec cluttered = randomRoom(seed, clutterOptions(false, false));
+    EXPECT_EQ(cluttered.width, plain.width);
+    ASSERT_EQ(cluttered.doors.size(), plain.doors.size());
+    for (std::size_t i = 0; i < plain.doors.size(); ++i) EXPECT_EQ(cluttered.doors[i].center, plain.doors[i].center);
+    EXPECT_GT(cluttered.furniture.size(), plain.furniture.size());
   }
 }

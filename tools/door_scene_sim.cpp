@@ -14,6 +14,7 @@
 #include "bag_writer.hpp"
 #include "cli_args.hpp"
 #include "door_state_recognition/sim/ground_truth.hpp"
+#include "door_state_recognition/sim/registered.hpp"
 #include "door_state_recognition/sim/scene.hpp"
 #include "door_state_recognition/sim/sensors.hpp"
 
@@ -48,6 +49,25 @@ options:
   --angle DEG            opening angle of every door, 0..180 (default: random)
   --max-angle DEG        largest random opening angle (default 130)
   --decoys MIN:MAX       tall cupboards/wardrobes of a random room (default 1:2)
+  --merge                TLS: PREFIX.pcd is every station's points in ONE cloud in
+                         the --frame frame, VIEWPOINT 0 0 0 as registered exports
+                         write it, overlaps as the stations give them; truth and
+                         station files in that frame
+  --frame map|station0   frame of --merge/--mesh-like (default map: z up, floor at
+                         z = 0, origin on the floor 0.5-2 m beyond the outer corner
+                         of walls 3 and 0, yaw by the seed: no scanner stood at
+                         0 0 0); station0: the first station's frame
+  --mesh-like N          TLS: the merged cloud resampled as about N vertices of a
+                         reconstructed mesh (Poisson-disk spacing, holes, rounded
+                         corners, 2 mm noise); implies --merge; no station files
+  --clutter              random room: desks with chairs, bookcases, shelves and
+                         cupboards against the walls beside doors (0-30 cm from
+                         the casing) and between them, a window-like gap with a
+                         low cabinet under it, a chair; never in a leaf's swing
+  --partition            random room: a bathroom in a corner (two interior walls,
+                         walls 4 and 5; its door is in the truth)
+  --corridor             random room: a corridor 6-12 m x 1.5-2.2 m, its doors
+                         (2 to MAX+2 of --doors) along the two long walls
   --bag-count N          clouds in the bag (default 3), --bag-rate HZ (default 1)
   --fixed-frame NAME     parent frame of the tf in the bag (default map)
   --quiet                no summary on stderr
@@ -82,6 +102,9 @@ int main(int argc, char** argv) {
   double angle = -1;
   bool quiet = false;
   bool handles = true;
+  bool merge = false;
+  std::string merged_frame;
+  long long mesh_vertices = 0;
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
@@ -125,6 +148,15 @@ int main(int argc, char** argv) {
       else if (a == "--bag-rate") bag.rate_hz = toDouble(a, value());
       else if (a == "--fixed-frame") bag.fixed_frame = value();
       else if (a == "--quiet") quiet = true;
+      else if (a == "--merge") merge = true;
+      else if (a == "--frame") merged_frame = value();
+      else if (a == "--mesh-like") {
+        mesh_vertices = toInt(a, value());
+        if (mesh_vertices < 100 || mesh_vertices > 10000000) throw UsageError("--mesh-like must lie in [100, 1e7]");
+        merge = true;
+      } else if (a == "--clutter") random_options.clutter = true;
+      else if (a == "--partition") random_options.partition = true;
+      else if (a == "--corridor") random_options.corridor = true;
       else throw UsageError("unknown argument '" + a + "'");
     }
     if (out.empty()) throw UsageError("--out PREFIX is required");
@@ -139,6 +171,12 @@ int main(int argc, char** argv) {
       if (f == "pcd" || f == "ply" || f == "json" || f == "bag") fmt.insert(f);
       else throw UsageError("--formats: unknown format '" + f + "'");
     if (fmt.empty()) throw UsageError("--formats is empty");
+    if (!merged_frame.empty() && !merge) throw UsageError("--frame needs --merge or --mesh-like");
+    if (merged_frame.empty()) merged_frame = "map";
+    if (merged_frame != "map" && merged_frame != "station0") throw UsageError("--frame must be map or station0");
+    if (merge && sensor != "tls") throw UsageError("--merge and --mesh-like are for --sensor tls");
+    if (merge && merged_frame == "map" && fmt.count("bag") && bag.fixed_frame == "map")
+      throw UsageError("--merge puts the cloud in frame map: give the bag another --fixed-frame (e.g. world)");
 
     const auto t_start = std::chrono::steady_clock::now();
     sim::RoomSpec spec = scene_name == "random" ? sim::randomRoom(seed, random_options) : sim::paperRoom(scene_name);
@@ -147,7 +185,14 @@ int main(int argc, char** argv) {
     spec.handles = handles;
     const sim::Scene scene = sim::buildScene(spec);
     tls.seed = rgbd.seed = seed;
-    const sim::SimulatedCloud cloud = sensor == "tls" ? sim::scanTls(scene, tls) : sim::captureRgbd(scene, rgbd);
+    sim::SimulatedCloud cloud = sensor == "tls" ? sim::scanTls(scene, tls) : sim::captureRgbd(scene, rgbd);
+    if (merge) cloud = sim::mergeStations(scene, cloud, {sim::mergedFrameFromString(merged_frame), seed});
+    if (mesh_vertices > 0) {
+      sim::MeshLikeOptions mesh;
+      mesh.vertices = static_cast<std::size_t>(mesh_vertices);
+      mesh.seed = seed;
+      cloud = sim::meshLike(cloud, mesh);
+    }
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_start).count();
 
     if (fmt.count("pcd") && pcl::io::savePCDFileBinary(out + ".pcd", cloud.cloud) != 0)
@@ -155,7 +200,7 @@ int main(int argc, char** argv) {
     // Several scan positions: each one's scan on its own too, in the same
     // frame, its position in the PCD's VIEWPOINT (as a survey's registered
     // stations come), for door_state_cli's multi-station input.
-    if (fmt.count("pcd") && cloud.viewpoints_world.size() > 1) {
+    if (fmt.count("pcd") && cloud.viewpoints_world.size() > 1 && mesh_vertices == 0) {
       const Eigen::Isometry3d world_to_cloud = cloud.sensor_to_world.inverse();
       for (std::size_t k = 0; k < cloud.viewpoints_world.size(); ++k) {
         pcl::PointCloud<pcl::PointXYZL> part;

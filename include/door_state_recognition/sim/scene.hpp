@@ -38,7 +38,7 @@ struct Box {
 };
 
 struct DoorSpec {
-  int wall = 0;              // 0..3, see RoomSpec
+  int wall = 0;              // 0..3, see RoomSpec; 4..5 a partition's walls
   double center = 0.0;       // along the wall from its middle, metres
   double width = 0.9;        // clear opening, metres
   double height = 2.05;      // clear opening, metres
@@ -48,12 +48,42 @@ struct DoorSpec {
   double recess = 0.0;       // closed leaf set back from the face on its swing side
 };
 
+// Kinds: solid boxes against a wall (cupboard, wardrobe, cabinet,
+// low_cabinet); open-front shelving against a wall (shelf, bookcase: side
+// panels, back, boards, rows of books); a desk against a wall (top, legs, a
+// drawer pedestal); free-standing: table (legs) and chair (seat, back, legs,
+// turned by `yaw`).
 struct FurnitureSpec {
-  std::string kind = "cupboard";  // cupboard | wardrobe | table | shelf
-  int wall = 0;                   // wall it stands against (ignored by "table")
-  double center = 0.0;            // along the wall (table: x in room frame)
-  double offset = 0.0;            // table: y in room frame
+  std::string kind = "cupboard";
+  int wall = 0;                   // wall it stands against (0..5; ignored by table and chair)
+  double center = 0.0;            // along the wall (table, chair: x in room frame)
+  double offset = 0.0;            // table, chair: y in room frame
+  double gap = 0.01;              // against a wall: its back this far from the wall's face
+  double yaw = 0.0;               // chair: its back's outward normal from the room's +x, radians
   double width = 1.0, depth = 0.5, height = 2.0;
+  std::uint32_t detail_seed = 0;  // shelving: the rows of books
+};
+
+// A window-like gap in a wall: an opening from `sill` to `head` above the
+// floor (nothing in it), no casing.
+struct WindowSpec {
+  int wall = 0;  // 0..3
+  double center = 0.0, width = 1.2;
+  double sill = 0.9, head = 2.1;
+};
+
+// A partition: a small room (a bathroom) in a corner of the room, closed by
+// two interior walls. Corner c lies between walls (c + 3) % 4 and c: 0 at
+// (-x, -y), 1 at (+x, -y), 2 at (+x, +y), 3 at (-x, +y) of the room frame.
+// Wall 4 runs parallel to the room's y axis, size_x from the corner's x
+// wall; wall 5 parallel to the x axis, size_y from the corner's y wall.
+// Their interior face (inward normal) faces the scanned room; their
+// thickness lies in the small room. A door in wall 4 or 5 is a DoorSpec with
+// that wall index; swing_into_room then means into the scanned room.
+struct PartitionSpec {
+  int corner = 2;
+  double size_x = 2.0, size_y = 2.0;  // outer size of the small room, interior face to the room's wall face
+  double thickness = 0.10;
 };
 
 // Room: interior [-width/2, width/2] x [-depth/2, depth/2] in the room frame,
@@ -74,6 +104,8 @@ struct RoomSpec {
   bool handles = true;
   std::vector<DoorSpec> doors;
   std::vector<FurnitureSpec> furniture;
+  std::vector<WindowSpec> windows;
+  std::optional<PartitionSpec> partition;
   // Where the laser scanner stands (room frame, z above the floor); unset:
   // drawn by the seed among the free positions.
   std::optional<Eigen::Vector3d> scanner;
@@ -87,13 +119,13 @@ struct DoorTruth {
   double width = 0, height = 0, angle_deg = 0;
   bool swing_into_room = true, hinge_left = true;
   double recess = 0;
-  int wall = 0;
+  int wall = 0;                    // 0..3, or 4..5 for a partition's door
   std::array<Eigen::Vector3d, 4> leaf_corners;  // mid-thickness: hinge-bottom, latch-bottom, latch-top, hinge-top
   std::string state(double closed_below_deg = 5.0, double open_from_deg = 90.0) const;
 };
 
 struct DecoyTruth {
-  std::string kind;
+  std::string kind;  // a furniture kind, or "window"
   Eigen::Vector3d center;  // centre of the box
   double height = 0;
   double width = 0, depth = 0;
@@ -112,10 +144,11 @@ struct Scene {
   std::vector<Box> boxes;
   std::vector<DoorTruth> doors;
   std::vector<DecoyTruth> decoys;
-  std::vector<WallTruth> walls;
+  std::vector<WallTruth> walls;  // 0..3 the room's, 4..5 a partition's
   Eigen::Isometry3d room_to_world = Eigen::Isometry3d::Identity();
   // True when p (world) is inside the scanned room's free space: inside the
-  // interior, not within `margin` of any box, and clear of inward door swings.
+  // interior and outside a partition's small room, not within `margin` of any
+  // box, and clear of inward door swings.
   bool isFree(const Eigen::Vector3d& p, double margin) const;
 };
 
@@ -131,11 +164,23 @@ struct RandomSceneOptions {
   int min_decoys = 1, max_decoys = 2;  // tall cupboards / wardrobes
   bool table = true;
   double closed_fraction = 0.3;        // share of doors drawn exactly closed
+  // Clutter along the walls: desks (with chairs), bookcases, shelves and
+  // cupboards against the walls beside doors (0-30 cm from the casing) and
+  // between them, a window-like gap with a low cabinet under it, a chair or
+  // two; never in a doorway or a leaf's swing.
+  bool clutter = false;
+  // A bathroom-like small room in a corner: two interior walls, a door in one.
+  bool partition = false;
+  // A corridor instead of a room: 6-12 m long, 1.5-2.2 m wide, its doors
+  // (at least 2, at most max_doors + 2) along the two long walls (0 and 2),
+  // swinging into the rooms behind more often than into the corridor.
+  bool corridor = false;
 };
 
 // A random, valid room: size, yaw, doors (hinge side, swing side, angle,
-// flush or recessed), tall cupboards/wardrobes and a table. Deterministic for
-// a seed.
+// flush or recessed), tall cupboards/wardrobes and a table; with the options,
+// clutter, a partition or a corridor. Deterministic for a seed; the room
+// without those options is the same as before they existed.
 RoomSpec randomRoom(std::uint64_t seed, const RandomSceneOptions& options = {});
 
 // Scenes shaped like the seed paper's three: "paper_livingroom" (one closed
