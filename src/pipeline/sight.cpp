@@ -132,21 +132,6 @@ class RangeSphere {
     const float r = (x - o_).norm();
     return nearest(x) < r - (kHiddenAbs + kHiddenRel * r);
   }
-  // Share of azimuth sectors (of 10 deg) in which some ray within 25 deg of
-  // the horizon meets a surface: a position enclosed by walls sees them all
-  // around; one outside a room sees its walls on one side only.
-  double enclosure() const {
-    const int sectors = 36, band = static_cast<int>(std::sin(25 * kPi / 180) / bin_);
-    int hit = 0;
-    for (int s = 0; s < sectors; ++s) {
-      bool any = false;
-      const int a0 = s * na_ / sectors, a1 = (s + 1) * na_ / sectors;
-      for (int e = ne_ / 2 - band; e <= ne_ / 2 + band && !any; ++e)
-        for (int a = a0; a < a1 && !any; ++a) any = std::isfinite(z_[static_cast<std::size_t>(e) * na_ + a]);
-      hit += any;
-    }
-    return static_cast<double>(hit) / sectors;
-  }
 
  private:
   std::pair<int, int> bins(const Eigen::Vector3f& u) const {
@@ -276,15 +261,44 @@ InferredStations inferStations(const pcl::PointCloud<pcl::PointXYZ>& cloud, cons
   for (float x = x0 + g / 2; x < x1; x += g)
     for (float y = y0 + g / 2; y < y1; y += g) cand.emplace_back(x, y, zs);
 
-  // Free positions only: nothing of the cloud within 0.3 m.
+  // Positions a scanner could stand at: free (nothing of the cloud within
+  // kClearance) and enclosed (walls all around: of 36 horizontal rays,
+  // kMinEnclosed meet the cloud's structure at the scanner's height within
+  // the extent; a position outside a room, or in a corridor's open end,
+  // sees its walls on one side only). On a 2D occupancy grid of the band
+  // +-0.6 m around that height.
   {
-    std::vector<Eigen::Vector3f> free;
+    constexpr float kCell = 0.1f, kClearance = 0.3f;
+    constexpr int kRays = 36, kMinEnclosed = 31;
+    const int nx = static_cast<int>(std::ceil((x1 - x0) / kCell)) + 1, ny = static_cast<int>(std::ceil((y1 - y0) / kCell)) + 1;
+    std::vector<char> occupied(static_cast<std::size_t>(nx) * ny, 0);
+    auto cellOf = [&](float x, float y, int& i, int& j) {
+      i = static_cast<int>(std::floor((x - x0) / kCell));
+      j = static_cast<int>(std::floor((y - y0) / kCell));
+      return i >= 0 && j >= 0 && i < nx && j < ny;
+    };
+    for (const auto& x : lev.p) {
+      int i, j;
+      if (std::abs(x.z() - zs) <= 0.6f && cellOf(x.x(), x.y(), i, j)) occupied[static_cast<std::size_t>(j) * nx + i] = 1;
+    }
+    std::vector<Eigen::Vector3f> kept;
     for (const auto& c : cand) {
       bool clear = true;
-      for (std::size_t i = 0; i < lev.p.size() && clear; ++i) clear = (lev.p[i] - c).squaredNorm() > 0.09f;
-      if (clear) free.push_back(c);
+      for (std::size_t i = 0; i < lev.p.size() && clear; ++i) clear = (lev.p[i] - c).squaredNorm() > kClearance * kClearance;
+      if (!clear) continue;
+      int enclosed = 0;
+      for (int r = 0; r < kRays; ++r) {
+        const float a = static_cast<float>(2 * kPi * r / kRays), dx = std::cos(a) * kCell / 2, dy = std::sin(a) * kCell / 2;
+        int i, j;
+        for (float x = c.x(), y = c.y(); cellOf(x, y, i, j); x += dx, y += dy)
+          if (occupied[static_cast<std::size_t>(j) * nx + i]) {
+            ++enclosed;
+            break;
+          }
+      }
+      if (enclosed >= kMinEnclosed) kept.push_back(c);
     }
-    cand.swap(free);
+    cand.swap(kept);
   }
   mark("sight_candidates");
   if (cand.empty()) return out;
@@ -297,27 +311,24 @@ InferredStations inferStations(const pcl::PointCloud<pcl::PointXYZ>& cloud, cons
   std::vector<int> sample;
   for (std::size_t i = 0; i < lev.p.size(); i += stride) sample.push_back(static_cast<int>(i));
   std::vector<std::vector<char>> sees(cand.size());
-  std::vector<double> enclosed(cand.size(), 0);
 #pragma omp parallel for schedule(dynamic, 1)
   for (long c = 0; c < static_cast<long>(cand.size()); ++c) {
     RangeSphere sphere(cand[c], 4 * kBin);
     sphere.cast(coarse);
-    enclosed[c] = sphere.enclosure();
     sees[c].resize(sample.size());
     for (std::size_t k = 0; k < sample.size(); ++k) sees[c][k] = !sphere.hidden(lev.p[sample[k]]);
   }
 
   mark("sight_score");
   // Greedy cover: the position seeing most of what no chosen one sees, while
-  // it adds a station's worth (kMinGain of the sample) and stands enclosed.
-  constexpr double kMinEnclosure = 0.85, kMinGain = 0.08;
+  // it adds a station's worth (kMinGain of the sample).
+  constexpr double kMinGain = 0.08;
   constexpr int kMaxStations = 6;
   std::vector<char> covered(sample.size(), 0);
   std::vector<std::size_t> chosen;
   while (static_cast<int>(chosen.size()) < kMaxStations) {
     std::size_t best = cand.size(), best_gain = 0;
     for (std::size_t c = 0; c < cand.size(); ++c) {
-      if (enclosed[c] < kMinEnclosure) continue;
       std::size_t gain = 0;
       for (std::size_t k = 0; k < sample.size(); ++k) gain += sees[c][k] && !covered[k];
       if (gain > best_gain) best_gain = gain, best = c;
