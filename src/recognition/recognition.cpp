@@ -242,6 +242,9 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   };
   const double footprint = std::max(p.voxel_size, 0.01);
   const int body0 = static_cast<int>(0.25 / row_h), body1 = std::min(rows, static_cast<int>(1.75 / row_h));
+  // The lower body, below a window's sill (0.8 m and up): a doorway seen
+  // through is seen through here too, where the floor runs on beyond it.
+  const int low1 = std::min(body1, static_cast<int>(0.8 / row_h));
   // Face and trim counts above the body in rows a fifth as high (a 5 cm row
   // slid in 1 cm steps over them): a head's trim only 7 cm high fills no
   // 5 cm row of the grid when it straddles two.
@@ -1010,17 +1013,20 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       }
     const int c0 = std::max(0, static_cast<int>((d.s0 - s_lo) / cell) + 1);
     const int c1 = std::min(cols - 1, static_cast<int>((d.s1 - s_lo) / cell) - 1);
-    int n = 0, f = 0, t = 0, fr = 0, re = 0;
+    int n = 0, f = 0, t = 0, fr = 0, re = 0, low_through = 0;
     for (int c = c0; c <= c1; ++c)
       for (int r = body0; r < body1; ++r) {
         const Cell& g = grid[static_cast<std::size_t>(r) * cols + c];
         ++n;
+        const bool through = g.through || (!g.face && !g.recess && !g.front && no_return_is_free);
         if (g.face) ++f;
         else if (g.through) ++t;
         else if (g.recess) ++re;
         else if (g.front) ++fr;
         else if (no_return_is_free) ++t;  // a camera got nothing back in range: nothing is there
+        low_through += through && r < low1;
       }
+    d.low_through = low_through > 0;
     n = f + t + fr + re;  // observed cells
     if (n > 0) {
       d.face = static_cast<double>(f) / n;

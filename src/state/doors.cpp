@@ -236,9 +236,13 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       // alone is no evidence there.
       const bool at_wall_end = d.s0 <= wall.s_min + kWallEndSlack || d.s1 >= wall.s_max - kWallEndSlack;
       const bool band_evidence = leaf.coverage > kClosedBandEvidence && !(organized && at_wall_end);
+      // Seen through only above 0.8 m (what is below hidden or solid) is a
+      // window over a sill, or a gap over furniture: a doorway's opening runs
+      // down to the floor, and the rays through it do too.
+      const bool seen_through = d.through >= 0.08 && d.low_through;
       const bool evidence = d.shadow_end ? own_leaf_hides
                             : closed ? (d.casing || d.recess > 0.3 || set_back || band_evidence)
-                                     : (d.casing || d.through >= 0.08 || own_leaf_hides);
+                                     : (d.casing || seen_through || own_leaf_hides);
       // A closed leaf whose foot is hidden by something standing right in
       // front of it is a blocked front, not a door.
       const Foot foot = closed ? footOf(pts, wall, leaf, floor_z, p.leaf_thickness, p.face_tolerance) : Foot{1, 0};

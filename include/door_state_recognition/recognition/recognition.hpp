@@ -47,6 +47,9 @@ struct Doorway {
   bool paired = false;     // both legs found: the jambs s0, s1 are exact
   double face = 0, through = 0, front = 0, recess = 0;  // shares of body cells, see findDoorways
   double thickness = 0;    // wall thickness seen at the jambs (0: unknown)
+  // Some body cell below 0.8 m above the floor is seen through: the opening
+  // reaches down to where a window's sill would stand.
+  bool low_through = false;
   double set_back = 0;     // found as a panel this far behind the wall above and beside it (0: not so found)
   // Found only as the sensor-near end of a shadow wider than any door (a
   // leaf swung towards the sensor): its far jamb is a guess, and only that
