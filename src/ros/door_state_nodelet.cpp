@@ -18,7 +18,10 @@
 // gives the rules; ~state_change_deg, default 20, is its state change); a
 // door the cloud shows has last_seen equal to the header's stamp. Stamps
 // going back by more than 1 s (a bag looped) reset the tracks, older clouds
-// within 1 s are not fused: both with a throttled warning. Bad input is logged (throttled) and
+// within 1 s are not fused; the sensor moving in the fixed frame faster than
+// ~max_sensor_speed (m/s, default 3; 0: never) + 0.5 m between two
+// processed clouds (a relocalisation jump) resets the tracks: each with a
+// throttled warning. Bad input is logged (throttled) and
 // answered with an empty DoorStateArray carrying the input's header; nothing
 // here may throw into the nodelet manager. Bad ~ parameters at start (unknown
 // name, wrong type, out of range) are refused before dynamic_reconfigure can
@@ -47,6 +50,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <memory>
+#include <optional>
 #include <mutex>
 #include <map>
 #include <sstream>
@@ -182,6 +186,11 @@ std::vector<std::string> checkPrivateParameters(const ros::NodeHandle& pnh) {
         problems.push_back(pname + " is " + got + ": must be a number of seconds > 0");
       continue;
     }
+    if (name == "max_sensor_speed") {
+      if (!isNumber(v) || !(asDouble(v) >= 0) || !std::isfinite(asDouble(v)))
+        problems.push_back(pname + " is " + got + ": must be a number of m/s >= 0 (0: no relocalisation check)");
+      continue;
+    }
     if (name == "state_change_deg") {
       if (!isNumber(v) || !(asDouble(v) > 0 && asDouble(v) <= 180))
         problems.push_back(pname + " is " + got + ": must be a number of degrees in (0, 180]");
@@ -193,7 +202,7 @@ std::vector<std::string> checkPrivateParameters(const ros::NodeHandle& pnh) {
     }
     const auto c = cfg.find(name);
     if (c == cfg.end()) {
-      problems.push_back(pname + ": unknown parameter (the pipeline's are those of config/default.yaml; the nodelet's own are fixed_frame, tf_queue_size, diagnostic_period, forget_after_s, state_change_deg)");
+      problems.push_back(pname + ": unknown parameter (the pipeline's are those of config/default.yaml; the nodelet's own are fixed_frame, tf_queue_size, diagnostic_period, forget_after_s, state_change_deg, max_sensor_speed)");
       continue;
     }
     const std::string& type = c->second->type;
@@ -366,6 +375,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
       dsr::FusionOptions fo;
       pnh_.param("forget_after_s", fo.forget_after_s, fo.forget_after_s);
       pnh_.param("state_change_deg", fo.state_change_deg, fo.state_change_deg);
+      pnh_.param("max_sensor_speed", max_sensor_speed_, max_sensor_speed_);
       fusion_ = dsr::DoorFusion(fo);  // checked above: cannot throw
     }
     pipeline_ = std::make_shared<const dsr::Pipeline>(params_);
@@ -627,7 +637,8 @@ class DoorStateNodelet : public nodelet::Nodelet {
         NODELET_DEBUG_THROTTLE(5.0, "door_state: %s", all.c_str());
       }
     }
-    publish(result, out_header, pipeline->parameters());
+    publish(result, out_header, pipeline->parameters(),
+            msg->header.frame_id != fixed_frame_ ? std::optional<Eigen::Vector3d>(viewpoint) : std::nullopt);
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     const double in_node_ms = (ros::WallTime::now() - received).toSec() * 1e3;
     const double age_ms = (ros::Time::now() - msg->header.stamp).toSec() * 1e3;
@@ -668,7 +679,32 @@ class DoorStateNodelet : public nodelet::Nodelet {
 
   // The cloud's doors into the fused tracks (fixed frame only); a warning
   // (throttled) when the stamps went backwards or out of order.
-  void fuse(const dsr::PipelineResult& r, const std_msgs::Header& header, const dsr::Parameters& params) {
+  void fuse(const dsr::PipelineResult& r, const std_msgs::Header& header, const dsr::Parameters& params,
+            const std::optional<Eigen::Vector3d>& sensor) {
+    // A relocalisation: the sensor's position in the fixed frame moved
+    // between two processed clouds by more than ~max_sensor_speed allows
+    // (plus kJumpSlack): the doors tracked before and those seen now are not
+    // in one frame any more; the tracks are reset (throttled warning). Not
+    // judged when the clouds arrive in the fixed frame (sensor unknown), nor
+    // across stamps going backwards (DoorFusion resets then anyway).
+    constexpr double kJumpSlack = 0.5;  // m
+    const double stamp = header.stamp.toSec();
+    if (sensor && last_sensor_ && max_sensor_speed_ > 0 && stamp >= last_sensor_stamp_) {
+      const double moved = (*sensor - *last_sensor_).norm();
+      const double allowed = kJumpSlack + max_sensor_speed_ * (stamp - last_sensor_stamp_);
+      if (moved > allowed) {
+        ++relocalisations_;
+        NODELET_WARN_THROTTLE(5.0, "door_state: the sensor moved %.2f m in the fixed frame '%s' in %.3f s (more than "
+                                   "~max_sensor_speed %.2f m/s allows): relocalisation; tracked_doors reset",
+                              moved, fixed_frame_.c_str(), stamp - last_sensor_stamp_, max_sensor_speed_);
+        noteError("relocalisation jump: tracked doors reset");
+        fusion_.reset();
+      }
+    }
+    if (sensor) {
+      last_sensor_ = sensor;
+      last_sensor_stamp_ = stamp;
+    }
     dsr::FusionOptions fo = fusion_.options();
     fo.closed_below_deg = params.closed_below_deg;
     fo.open_from_deg = params.open_from_deg;
@@ -699,7 +735,9 @@ class DoorStateNodelet : public nodelet::Nodelet {
     pub_tracked_.publish(tracked);
   }
 
-  void publish(const dsr::PipelineResult& r, const std_msgs::Header& header, const dsr::Parameters& params) {
+  // `sensor`: where the sensor was in the fixed frame (none: not known).
+  void publish(const dsr::PipelineResult& r, const std_msgs::Header& header, const dsr::Parameters& params,
+               const std::optional<Eigen::Vector3d>& sensor = std::nullopt) {
     std::vector<Eigen::Vector3d> centres;
     for (const auto& d : r.doors) centres.push_back(d.opening_center);
     // Matched across the pipeline's up vector (-y in a camera optical frame).
@@ -709,7 +747,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
     out->header = header;
     for (std::size_t i = 0; i < r.doors.size(); ++i) out->doors.push_back(toMsg(r.doors[i], ids[i], header.stamp, 1));
     pub_doors_.publish(out);
-    if (!fixed_frame_.empty()) fuse(r, header, params);
+    if (!fixed_frame_.empty()) fuse(r, header, params, sensor);
     if (pub_markers_.getNumSubscribers() > 0) {
       auto markers = boost::make_shared<visualization_msgs::MarkerArray>(dsr::ros_io::makeMarkers(r, ids, header));
       if (!fixed_frame_.empty()) dsr::ros_io::addTrackedMarkers(fusion_.tracks(), header, *markers);
@@ -785,6 +823,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
       stat.add("tracked doors", tracked_count_.load());
       stat.add("tracked doors reset (time went backwards)", fusion_resets_.load());
       stat.add("clouds not fused (out of order)", fusion_ignored_.load());
+      stat.add("tracked doors reset (relocalisation)", relocalisations_.load());
     }
   }
 
@@ -809,7 +848,10 @@ class DoorStateNodelet : public nodelet::Nodelet {
   ros::WallTime last_refusal_time_;
   dsr::DoorTracker tracker_;                        // worker only
   dsr::DoorFusion fusion_;                          // worker only (fixed frame)
-  std::atomic<unsigned long> fusion_resets_{0}, fusion_ignored_{0};
+  std::atomic<unsigned long> fusion_resets_{0}, fusion_ignored_{0}, relocalisations_{0};
+  double max_sensor_speed_ = 3.0;                   // m/s, ~max_sensor_speed
+  std::optional<Eigen::Vector3d> last_sensor_;      // worker only
+  double last_sensor_stamp_ = 0;
   std::atomic<std::size_t> tracked_count_{0};
   pcl::PointCloud<pcl::PointXYZ> cloud_;            // worker only, reused between clouds
   // The one-cloud slot between the subscriber callback and the worker.

@@ -3,9 +3,10 @@
 // laser scans (dsr::sim) of two rooms 30 m apart in `map`, from sensor
 // frames whose static tf into `map` the test publishes, stamped so that the
 // drive goes on, one door leaves the view and is forgotten, and then time
-// goes backwards (a bag looped). Checked: one id per door, observations and
-// last_seen, a door kept after it leaves the view, greyed markers, the
-// forgetting, the reset with its warning, and the nodelet alive after it.
+// goes backwards (a bag looped), and the sensor's pose jumps
+// (relocalisation). Checked: one id per door, observations and last_seen, a
+// door kept after it leaves the view, greyed markers, the forgetting, the
+// resets with their warnings, and the nodelet alive after them.
 #include <gtest/gtest.h>
 #include <pcl_conversions/pcl_conversions.h>
 #include <ros/ros.h>
@@ -166,9 +167,13 @@ TEST_F(TrackedDoors, OneIdPerDoorKeptOutOfViewForgottenAndResetWhenTimeGoesBack)
   const Scan house_a = scan("paper_house", 11, "scanner_a", 0.0);
   const Scan house_b = scan("paper_house", 12, "scanner_b", 0.0);
   const Scan far = scan("paper_multidoor", 11, "scanner_c", 30.0);
+  // The house scan again from a frame 8 m off in map: a relocalisation jump.
+  Scan jumped = house_a;
+  jumped.frame = "scanner_d";
+  jumped.sensor_to_map = Eigen::Translation3d(0, 8, 0) * house_a.sensor_to_map;
   tf2_ros::StaticTransformBroadcaster tfb;
   std::vector<geometry_msgs::TransformStamped> tfs;
-  for (const Scan* s : {&house_a, &house_b, &far}) {
+  for (const Scan* s : {&house_a, &house_b, &far, &jumped}) {
     geometry_msgs::TransformStamped t = tf2::eigenToTransform(s->sensor_to_map);
     t.header.frame_id = "map";
     t.child_frame_id = s->frame;
@@ -199,15 +204,16 @@ TEST_F(TrackedDoors, OneIdPerDoorKeptOutOfViewForgottenAndResetWhenTimeGoesBack)
   EXPECT_EQ(doors.doors[0].last_seen, ros::Time(100.0));
 
   // 2. The house from pose b: the same id, two observations.
-  ASSERT_TRUE(send(house_b, 101.0, &tracked, &doors)) << "no answer to cloud 2";
+  ASSERT_TRUE(send(house_b, 103.0, &tracked, &doors)) << "no answer to cloud 2";
   ASSERT_EQ(tracked.doors.size(), 1u);
   EXPECT_EQ(tracked.doors[0].id, house_id);
   EXPECT_EQ(tracked.doors[0].observations, 2u);
-  EXPECT_EQ(tracked.doors[0].last_seen, ros::Time(101.0));
+  EXPECT_EQ(tracked.doors[0].last_seen, ros::Time(103.0));
 
   // 3. The far room: `doors` holds its doors only; tracked_doors keeps the
-  // house door (last seen at 101, greyed in the markers) beside them.
-  ASSERT_TRUE(send(far, 102.0, &tracked, &doors)) << "no answer to cloud 3";
+  // house door (last seen at 103, greyed in the markers) beside them. (The
+  // robot drove 30 m in 12 s: under ~max_sensor_speed, no relocalisation.)
+  ASSERT_TRUE(send(far, 115.0, &tracked, &doors)) << "no answer to cloud 3";
   const std::size_t n_far = doors.doors.size();
   ASSERT_GE(n_far, 1u) << "no door found in the far room";
   EXPECT_LE(n_far, far.truth["doors"].size());
@@ -222,18 +228,18 @@ TEST_F(TrackedDoors, OneIdPerDoorKeptOutOfViewForgottenAndResetWhenTimeGoesBack)
   ASSERT_NE(h, nullptr) << "the house door left tracked_doors when it left the view";
   EXPECT_EQ(h->id, house_id);
   EXPECT_EQ(h->observations, 2u);
-  EXPECT_EQ(h->last_seen, ros::Time(101.0));
+  EXPECT_EQ(h->last_seen, ros::Time(103.0));
   std::set<std::uint32_t> far_ids;
   for (const auto& d : tracked.doors)
     if (&d != h) {
-      EXPECT_EQ(d.last_seen, ros::Time(102.0));
+      EXPECT_EQ(d.last_seen, ros::Time(115.0));
       EXPECT_EQ(d.observations, 1u);
       far_ids.insert(d.id);
     }
   EXPECT_EQ(far_ids.size(), n_far);
   EXPECT_EQ(far_ids.count(house_id), 0u);
   visualization_msgs::MarkerArray markers;
-  ASSERT_TRUE(markersAt(102.0, &markers)) << "no markers for cloud 3";
+  ASSERT_TRUE(markersAt(115.0, &markers)) << "no markers for cloud 3";
   int greyed = 0, vivid = 0;
   for (const auto& m : markers.markers) {
     if (m.ns != "tracked_leaf_lines") continue;
@@ -243,8 +249,8 @@ TEST_F(TrackedDoors, OneIdPerDoorKeptOutOfViewForgottenAndResetWhenTimeGoesBack)
   EXPECT_EQ(greyed, 1) << "the house door, not in view, is not greyed";
   EXPECT_EQ(vivid, static_cast<int>(n_far));
 
-  // 4. The far room again 23 s later: ~forget_after_s is 20, the house door
-  // (last seen 24 s before) is forgotten; the far doors keep their ids.
+  // 4. The far room again at 125: ~forget_after_s is 20, the house door
+  // (last seen 22 s before) is forgotten; the far doors keep their ids.
   ASSERT_TRUE(send(far, 125.0, &tracked, &doors)) << "no answer to cloud 4";
   EXPECT_EQ(near(tracked, house_door), nullptr) << "the house door was not forgotten";
   ASSERT_EQ(tracked.doors.size(), n_far);
@@ -263,10 +269,20 @@ TEST_F(TrackedDoors, OneIdPerDoorKeptOutOfViewForgottenAndResetWhenTimeGoesBack)
   EXPECT_EQ(far_ids.count(tracked.doors[0].id), 0u);
   EXPECT_TRUE(logged(rosgraph_msgs::Log::WARN, "tracked_doors reset")) << "no warning on the reset";
   const std::uint32_t new_id = tracked.doors[0].id;
-  ASSERT_TRUE(send(house_b, 51.0, &tracked, &doors)) << "the nodelet stopped answering after the reset";
+  ASSERT_TRUE(send(house_b, 53.0, &tracked, &doors)) << "the nodelet stopped answering after the reset";
   ASSERT_EQ(tracked.doors.size(), 1u);
   EXPECT_EQ(tracked.doors[0].id, new_id);
   EXPECT_EQ(tracked.doors[0].observations, 2u);
+
+  // 6. The sensor jumps 8 m in map within 1 s (relocalisation): the tracks
+  // are reset with a warning, no door is duplicated: the one door, where
+  // the new pose puts it, with a new id.
+  ASSERT_TRUE(send(jumped, 54.0, &tracked, &doors)) << "no answer after the relocalisation";
+  ASSERT_EQ(tracked.doors.size(), 1u);
+  EXPECT_NE(near(tracked, house_door + Eigen::Vector3d(0, 8, 0)), nullptr);
+  EXPECT_NE(tracked.doors[0].id, new_id);
+  EXPECT_EQ(tracked.doors[0].observations, 1u);
+  EXPECT_TRUE(logged(rosgraph_msgs::Log::WARN, "relocalisation")) << "no warning on the relocalisation";
 }
 
 int main(int argc, char** argv) {
