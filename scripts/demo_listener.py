@@ -6,7 +6,7 @@ import numpy as np
 import rospy
 from door_state_recognition.msg import DoorStateArray
 
-STATES = {0: "closed", 1: "semi_open", 2: "open"}
+STATES = {0: "closed", 1: "semi_open", 2: "open", 3: "not_closed"}
 
 def main():
     truth = json.load(open(sys.argv[1]))

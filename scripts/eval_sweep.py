@@ -84,8 +84,10 @@ def main():
             truth = json.load(open(f"{prefix}.json"))
             desc = " ".join(f"{d['state'][:4]}{d['opening_angle_deg']:.0f}{'T' if d['swing']=='toward_viewer' else 'A'}"
                             for d in truth["doors"])
+            # '>' a lower bound, 'NC' reported not_closed, 'B' a bound above the true angle, '!' state wrong
             errs = " ".join(f"{m['angle_error_deg']:.1f}{'>' if m.get('angle_is_lower_bound') else ''}"
-                            f"/{m['hinge_error_m']:.2f}{'' if m['state_correct'] else '!'}"
+                            f"/{m['hinge_error_m']:.2f}{'NC' if m.get('not_closed') else ''}"
+                            f"{'B' if m.get('bound_error') else ''}{'' if m['state_correct'] else '!'}"
                             for m in r["matches"])
             print(f"seed {seed}: truth [{desc}] matched {r['matched']}/{r['true_doors']} reported {r['reported_doors']}"
                   f" errs(deg/m) {errs} missed {r['missed_truth']} extra {r['unmatched_report']}", file=sys.stderr)
@@ -93,7 +95,8 @@ def main():
                             capture_output=True, text=True)
     m = json.loads(merged.stdout)
     summary = {k: m.get(k) for k in ["scenes", "true_doors", "reported_doors", "matched", "precision", "recall",
-                                     "state_accuracy", "angle_mae_deg", "angle_mae_measured_deg",
+                                     "state_accuracy", "state_accuracy_measured", "not_closed", "bound_errors",
+                                     "angle_mae_deg", "angle_mae_measured_deg",
                                      "angle_lower_bounds", "hinge_error_median_m"]}
     summary.update(sensor=args.sensor, first_seed=args.first_seed)
     if args.sensor == "tls":

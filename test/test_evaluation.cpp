@@ -367,3 +367,85 @@ TEST(Evaluation, SwappedOrWrongDocumentsAreRefused) {
   EXPECT_NE(message(bare_t, r).find("truth: missing field \"scene\""), std::string::npos) << message(bare_t, r);
   EXPECT_NE(message(t, bare_r).find("report: missing field \"points_in\""), std::string::npos) << message(t, bare_r);
 }
+
+// Issue 20: a door reported NOT_CLOSED (leaf unseen, bound under
+// open_from_deg) is found but never in a right state; the count of such
+// reports is kept, including one that matches no door (a false door).
+TEST(Evaluation, NotClosedCountsAsFoundButNeverAsARightState) {
+  json t = truthDoc({truthDoor(vec(0, 0, 0), vec(-0.45, 0, 0), 40, "semi_open"),
+                     truthDoor(vec(3, 0, 0), vec(2.55, 0, 0), 110, "open"),
+                     truthDoor(vec(6, 0, 0), vec(5.55, 0, 0), 0, "closed")});
+  json nc0 = reportDoor(0, vec(0, 0, 0), vec(-0.45, 0, 0), 30, "not_closed");
+  nc0["angle_is_lower_bound"] = true;
+  json nc1 = reportDoor(1, vec(3, 0, 0), vec(2.55, 0, 0), 60, "not_closed");
+  nc1["angle_is_lower_bound"] = true;
+  json stray = reportDoor(2, vec(9, 0, 0), vec(8.55, 0, 0), 20, "not_closed");
+  stray["angle_is_lower_bound"] = true;
+  json r = reportDoc({nc0, nc1, reportDoor(3, vec(6, 0, 0), vec(5.55, 0, 0), 1, "closed"), stray});
+  const EvalResult res = evaluate(t, r);
+  EXPECT_EQ(res.true_doors, 3);
+  EXPECT_EQ(res.reported_doors, 4);
+  EXPECT_EQ(res.matched, 3);
+  EXPECT_DOUBLE_EQ(res.recall(), 1.0);
+  EXPECT_EQ(res.state_correct, 1);  // only the closed door
+  EXPECT_EQ(res.not_closed, 3);     // every report in that state, the stray one too
+  EXPECT_EQ(res.bound_errors, 0);
+  ASSERT_EQ(res.matches.size(), 3u);
+  EXPECT_TRUE(res.matches[0].not_closed);
+  EXPECT_FALSE(res.matches[0].state_correct);
+  EXPECT_FALSE(res.matches[2].not_closed);
+  EXPECT_NEAR(res.stateAccuracy(), 1.0 / 3.0, 1e-12);
+  EXPECT_NEAR(res.stateAccuracyMeasured(), 1.0, 1e-12);  // the one measured leaf
+  const json j = dsr::eval::toJson(res);
+  EXPECT_EQ(j["not_closed"], 3);
+  EXPECT_EQ(j["bound_errors"], 0);
+  EXPECT_NEAR(j["state_accuracy_measured"].get<double>(), 1.0, 1e-12);
+  EXPECT_EQ(j["matches"][0]["not_closed"], true);
+  // A truth document that says "not_closed" is no excuse: still not a right state.
+  json t2 = truthDoc({truthDoor(vec(0, 0, 0), vec(-0.45, 0, 0), 40, "not_closed")});
+  EXPECT_EQ(evaluate(t2, reportDoc({nc0})).state_correct, 0);
+  // merge adds the counts.
+  const EvalResult m = dsr::eval::merge({res, res});
+  EXPECT_EQ(m.not_closed, 6);
+  EXPECT_EQ(m.matched, 6);
+}
+
+TEST(Evaluation, ALowerBoundAboveTheTrueAngleIsABoundError) {
+  // Bounds of 44 (true 43: within the bound's 2 deg step, no error), 50
+  // (true 40: an error), 95 given as a measured angle (true 60: not a bound,
+  // so an angle error only), 91 as a bound of a door at 100 (no error).
+  json t = truthDoc({truthDoor(vec(0, 0, 0), vec(-0.45, 0, 0), 43, "semi_open"),
+                     truthDoor(vec(3, 0, 0), vec(2.55, 0, 0), 40, "semi_open"),
+                     truthDoor(vec(6, 0, 0), vec(5.55, 0, 0), 60, "semi_open"),
+                     truthDoor(vec(9, 0, 0), vec(8.55, 0, 0), 100, "open")});
+  auto bound = [](json d) {
+    d["angle_is_lower_bound"] = true;
+    return d;
+  };
+  json r = reportDoc({bound(reportDoor(0, vec(0, 0, 0), vec(-0.45, 0, 0), 44, "not_closed")),
+                      bound(reportDoor(1, vec(3, 0, 0), vec(2.55, 0, 0), 50, "not_closed")),
+                      reportDoor(2, vec(6, 0, 0), vec(5.55, 0, 0), 95, "open"),
+                      bound(reportDoor(3, vec(9, 0, 0), vec(8.55, 0, 0), 91, "open"))});
+  const EvalResult res = evaluate(t, r);
+  ASSERT_EQ(res.matched, 4);
+  EXPECT_EQ(res.bound_errors, 1);
+  EXPECT_FALSE(res.matches[0].bound_error);
+  EXPECT_TRUE(res.matches[1].bound_error);
+  EXPECT_FALSE(res.matches[2].bound_error);
+  EXPECT_FALSE(res.matches[3].bound_error);
+  EXPECT_EQ(res.state_correct, 1);  // the open bound; the measured 95 is "open" for a semi-open door
+  EXPECT_NEAR(res.stateAccuracyMeasured(), 0.0, 1e-12);
+  EXPECT_EQ(dsr::eval::toJson(res)["bound_errors"], 1);
+  EXPECT_EQ(dsr::eval::toJson(res)["matches"][1]["bound_error"], true);
+}
+
+TEST(Evaluation, ANotClosedReportOfADoorOutOfViewCountsNeitherWay) {
+  json t = truthDoc({truthDoor(vec(0, 0, 0), vec(-0.45, 0, 0), 40, "semi_open")});
+  t["doors"][0]["in_view"] = false;
+  json nc = reportDoor(0, vec(0, 0, 0), vec(-0.45, 0, 0), 30, "not_closed");
+  nc["angle_is_lower_bound"] = true;
+  const EvalResult res = evaluate(t, reportDoc({nc}), 0.5, true);
+  EXPECT_EQ(res.reported_doors, 0);
+  EXPECT_EQ(res.not_closed, 0);
+  EXPECT_TRUE(std::isnan(res.stateAccuracyMeasured()));
+}

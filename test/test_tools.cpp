@@ -227,7 +227,10 @@ TEST(Tools, CliReportHasTheDocumentedShape) {
   for (const auto& d : j["doors"]) {
     EXPECT_EQ(d["leaf_corners"].size(), 4u);
     const std::string st = d["state"];
-    EXPECT_TRUE(st == "closed" || st == "semi_open" || st == "open");
+    EXPECT_TRUE(st == "closed" || st == "semi_open" || st == "open" || st == "not_closed");
+    EXPECT_GE(d["clear_width"].get<double>(), 0.0);
+    EXPECT_LE(d["clear_width"].get<double>(), d["width"].get<double>());
+    if (st == "closed") EXPECT_EQ(d["clear_width"].get<double>(), 0.0);
     EXPECT_GE(d["confidence"].get<double>(), 0.0);
     EXPECT_LE(d["confidence"].get<double>(), 1.0);
   }

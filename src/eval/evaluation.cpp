@@ -91,6 +91,13 @@ double EvalResult::precision() const { return reported_doors == 0 ? 1.0 : double
 double EvalResult::recall() const { return true_doors == 0 ? 1.0 : double(matched) / true_doors; }
 double EvalResult::stateAccuracy() const { return matched == 0 ? kNaN : double(state_correct) / matched; }
 
+double EvalResult::stateAccuracyMeasured() const {
+  int n = 0, ok = 0;
+  for (const auto& m : matches)
+    if (!m.angle_is_lower_bound) ++n, ok += m.state_correct;
+  return n == 0 ? kNaN : double(ok) / n;
+}
+
 double EvalResult::angleMaeDeg() const {
   std::vector<double> v;
   for (const auto& m : matches) v.push_back(m.angle_error_deg);
@@ -159,20 +166,27 @@ EvalResult evaluate(const json& truth, const json& report, double max_center_dis
   EvalResult res;
   res.true_doors = int(t.size());
   res.reported_doors = int(r.size());
-  std::vector<bool> t_used(t.size(), false), r_used(r.size(), false);
+  std::vector<bool> t_used(t.size(), false), r_used(r.size(), false), r_out_of_view(r.size(), false);
   for (const Door& d : t) res.true_doors -= d.out_of_view;
   for (const auto& [dist, i, j] : pairs) {
     if (t_used[i] || r_used[j]) continue;
     t_used[i] = r_used[j] = true;
     if (t[i].out_of_view) {  // a door outside the view counts neither way
       --res.reported_doors;
+      r_out_of_view[j] = true;
       continue;
     }
-    const bool ok = t[i].state == r[j].state;
-    res.matches.push_back(
-        {i, j, dist, ok, std::abs(r[j].angle - t[i].angle), (r[j].hinge - t[i].hinge).norm(), r[j].lower_bound});
+    const bool not_closed = r[j].state == "not_closed";
+    const bool ok = t[i].state == r[j].state && !not_closed;
+    const bool bound_error = r[j].lower_bound && r[j].angle > t[i].angle + kBoundSlackDeg;
+    res.matches.push_back({i, j, dist, ok, std::abs(r[j].angle - t[i].angle), (r[j].hinge - t[i].hinge).norm(),
+                           r[j].lower_bound, not_closed, bound_error});
     res.state_correct += ok;
+    res.bound_errors += bound_error;
   }
+  // Every report still counted in reported_doors (not one matched to a door out of view).
+  for (int j = 0; j < int(r.size()); ++j)
+    if (r[j].state == "not_closed" && !r_out_of_view[j]) ++res.not_closed;
   res.matched = int(res.matches.size());
   std::sort(res.matches.begin(), res.matches.end(),
             [](const DoorMatch& a, const DoorMatch& b) { return a.truth_index < b.truth_index; });
@@ -192,14 +206,19 @@ json toJson(const EvalResult& res) {
                        {"state_correct", m.state_correct},
                        {"angle_error_deg", numOrNull(m.angle_error_deg)},
                        {"hinge_error_m", numOrNull(m.hinge_error_m)},
-                       {"angle_is_lower_bound", m.angle_is_lower_bound}});
+                       {"angle_is_lower_bound", m.angle_is_lower_bound},
+                       {"not_closed", m.not_closed},
+                       {"bound_error", m.bound_error}});
   return {{"true_doors", res.true_doors},
           {"reported_doors", res.reported_doors},
           {"matched", res.matched},
           {"state_correct", res.state_correct},
           {"precision", numOrNull(res.precision())},
           {"recall", numOrNull(res.recall())},
+          {"not_closed", res.not_closed},
+          {"bound_errors", res.bound_errors},
           {"state_accuracy", numOrNull(res.stateAccuracy())},
+          {"state_accuracy_measured", numOrNull(res.stateAccuracyMeasured())},
           {"angle_mae_deg", numOrNull(res.angleMaeDeg())},
           {"angle_mae_measured_deg", numOrNull(res.angleMaeMeasuredDeg())},
           {"angle_lower_bounds", std::count_if(res.matches.begin(), res.matches.end(),
@@ -218,6 +237,8 @@ EvalResult merge(const std::vector<EvalResult>& results) {
     out.reported_doors += r.reported_doors;
     out.matched += r.matched;
     out.state_correct += r.state_correct;
+    out.not_closed += r.not_closed;
+    out.bound_errors += r.bound_errors;
     out.matches.insert(out.matches.end(), r.matches.begin(), r.matches.end());
     out.missed_truth.insert(out.missed_truth.end(), r.missed_truth.begin(), r.missed_truth.end());
     out.unmatched_report.insert(out.unmatched_report.end(), r.unmatched_report.begin(), r.unmatched_report.end());

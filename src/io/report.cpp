@@ -48,6 +48,7 @@ nlohmann::json reportJson(const PipelineResult& r, const std::string& input) {
                           {"opening_center", vec(d.opening_center)},
                           {"width", d.width},
                           {"height", d.height},
+                          {"clear_width", d.clear_width},
                           {"leaf_corners", corners(d.leaf_corners)},
                           {"swing", toString(d.swing)},
                           {"wall_normal", vec(d.wall_normal)}});

@@ -49,8 +49,22 @@ const char* toString(DoorStateKind s) {
     case DoorStateKind::Closed: return "closed";
     case DoorStateKind::SemiOpen: return "semi_open";
     case DoorStateKind::Open: return "open";
+    case DoorStateKind::NotClosed: return "not_closed";
   }
   return "closed";
+}
+
+double clearWidth(double width, double angle_deg, double leaf_thickness, double closed_below_deg) {
+  if (!std::isfinite(width) || !std::isfinite(angle_deg) || !std::isfinite(leaf_thickness) || width <= 0 ||
+      angle_deg < closed_below_deg)
+    return 0.0;
+  const double th = std::min(180.0, std::max(0.0, angle_deg)) * M_PI / 180.0;
+  const double taken = width * std::max(0.0, std::cos(th)) + std::max(0.0, leaf_thickness) * std::sin(th);
+  return std::max(0.0, width - taken);
+}
+
+DoorStateKind stateOfBound(double bound_deg, const Parameters& p) {
+  return bound_deg >= p.open_from_deg ? DoorStateKind::Open : DoorStateKind::NotClosed;
 }
 
 const char* toString(Swing s) {

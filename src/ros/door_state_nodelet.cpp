@@ -11,7 +11,17 @@
 // nodelet's callback queue (dynamic_reconfigure, diagnostics, connection
 // callbacks) is never blocked by the pipeline.
 // Publishes `doors` (DoorStateArray), `markers` (MarkerArray) and
-// `reconstructed_walls` (PointCloud2). Bad input is logged (throttled) and
+// `reconstructed_walls` (PointCloud2). With ~fixed_frame set, also
+// `tracked_doors` (DoorStateArray in the fixed frame, with every processed
+// cloud): every door seen within ~forget_after_s (s, default 300), each with
+// one id and its best estimate over the drive (dsr::DoorFusion, whose header
+// gives the rules; ~state_change_deg, default 20, is its state change); a
+// door the cloud shows has last_seen equal to the header's stamp. Stamps
+// going back by more than 1 s (a bag looped) reset the tracks, older clouds
+// within 1 s are not fused; the sensor moving in the fixed frame faster than
+// ~max_sensor_speed (m/s, default 3; 0: never) + 0.5 m between two
+// processed clouds (a relocalisation jump) resets the tracks: each with a
+// throttled warning. Bad input is logged (throttled) and
 // answered with an empty DoorStateArray carrying the input's header; nothing
 // here may throw into the nodelet manager. Bad ~ parameters at start (unknown
 // name, wrong type, out of range) are refused before dynamic_reconfigure can
@@ -40,6 +50,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <memory>
+#include <optional>
 #include <mutex>
 #include <map>
 #include <sstream>
@@ -52,6 +63,7 @@
 #include "door_state_recognition/pipeline/pipeline.hpp"
 #include "door_state_recognition/ros/cloud_conversion.hpp"
 #include "door_state_recognition/ros/markers.hpp"
+#include "door_state_recognition/tracking/door_fusion.hpp"
 #include "door_state_recognition/tracking/door_tracker.hpp"
 
 namespace door_state_recognition {
@@ -169,13 +181,28 @@ std::vector<std::string> checkPrivateParameters(const ros::NodeHandle& pnh) {
       if (v.getType() != XmlRpc::XmlRpcValue::TypeInt || static_cast<int>(v) < 1) problems.push_back(pname + " is " + got + ": must be an int >= 1");
       continue;
     }
+    if (name == "forget_after_s") {
+      if (!isNumber(v) || !(asDouble(v) > 0) || !std::isfinite(asDouble(v)))
+        problems.push_back(pname + " is " + got + ": must be a number of seconds > 0");
+      continue;
+    }
+    if (name == "max_sensor_speed") {
+      if (!isNumber(v) || !(asDouble(v) >= 0) || !std::isfinite(asDouble(v)))
+        problems.push_back(pname + " is " + got + ": must be a number of m/s >= 0 (0: no relocalisation check)");
+      continue;
+    }
+    if (name == "state_change_deg") {
+      if (!isNumber(v) || !(asDouble(v) > 0 && asDouble(v) <= 180))
+        problems.push_back(pname + " is " + got + ": must be a number of degrees in (0, 180]");
+      continue;
+    }
     if (name == "diagnostic_period") {  // read by diagnostic_updater::Updater
       if (!isNumber(v) || !(asDouble(v) > 0)) problems.push_back(pname + " is " + got + ": must be a number of seconds > 0");
       continue;
     }
     const auto c = cfg.find(name);
     if (c == cfg.end()) {
-      problems.push_back(pname + ": unknown parameter (the pipeline's are those of config/default.yaml; the nodelet's own are fixed_frame, tf_queue_size, diagnostic_period)");
+      problems.push_back(pname + ": unknown parameter (the pipeline's are those of config/default.yaml; the nodelet's own are fixed_frame, tf_queue_size, diagnostic_period, forget_after_s, state_change_deg, max_sensor_speed)");
       continue;
     }
     const std::string& type = c->second->type;
@@ -344,6 +371,13 @@ class DoorStateNodelet : public nodelet::Nodelet {
     pnh_.param<std::string>("fixed_frame", fixed_frame_, "");
     pnh_.param("tf_queue_size", tf_queue_size_, 5);
     if (tf_queue_size_ < 1) tf_queue_size_ = 1;
+    {
+      dsr::FusionOptions fo;
+      pnh_.param("forget_after_s", fo.forget_after_s, fo.forget_after_s);
+      pnh_.param("state_change_deg", fo.state_change_deg, fo.state_change_deg);
+      pnh_.param("max_sensor_speed", max_sensor_speed_, max_sensor_speed_);
+      fusion_ = dsr::DoorFusion(fo);  // checked above: cannot throw
+    }
     pipeline_ = std::make_shared<const dsr::Pipeline>(params_);
     last_good_config_ = DoorStateConfig::__getDefault__();
 
@@ -376,6 +410,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
     pub_doors_ = nh_.advertise<DoorStateArray>("doors", 1, cb, cb);
     pub_markers_ = nh_.advertise<visualization_msgs::MarkerArray>("markers", 1, cb, cb);
     pub_walls_ = nh_.advertise<sensor_msgs::PointCloud2>("reconstructed_walls", 1, cb, cb);
+    if (!fixed_frame_.empty()) pub_tracked_ = nh_.advertise<DoorStateArray>("tracked_doors", 1, cb, cb);
     diagnostics_timer_ = nh_.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { diagnostics_->update(); });
     NODELET_INFO("door_state: waiting for subscribers before subscribing to %s (fixed_frame '%s')",
                  nh_.resolveName("points").c_str(), fixed_frame_.c_str());
@@ -408,7 +443,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
   void connectionChanged() {
     std::lock_guard<std::mutex> lock(connect_mutex_);
     const bool wanted = pub_doors_.getNumSubscribers() > 0 || pub_markers_.getNumSubscribers() > 0 ||
-                        pub_walls_.getNumSubscribers() > 0;
+                        pub_walls_.getNumSubscribers() > 0 || pub_tracked_.getNumSubscribers() > 0;
     if (wanted && !subscribed_) subscribe();
     if (!wanted && subscribed_) unsubscribe();
   }
@@ -602,7 +637,8 @@ class DoorStateNodelet : public nodelet::Nodelet {
         NODELET_DEBUG_THROTTLE(5.0, "door_state: %s", all.c_str());
       }
     }
-    publish(result, out_header);
+    publish(result, out_header, pipeline->parameters(),
+            msg->header.frame_id != fixed_frame_ ? std::optional<Eigen::Vector3d>(viewpoint) : std::nullopt);
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     const double in_node_ms = (ros::WallTime::now() - received).toSec() * 1e3;
     const double age_ms = (ros::Time::now() - msg->header.stamp).toSec() * 1e3;
@@ -618,7 +654,90 @@ class DoorStateNodelet : public nodelet::Nodelet {
 
   bool wantWalls() const { return pub_walls_.getNumSubscribers() > 0 || pub_markers_.getNumSubscribers() > 0; }
 
-  void publish(const dsr::PipelineResult& r, const std_msgs::Header& header) {
+  static DoorState toMsg(const dsr::DoorResult& d, std::uint32_t id, const ros::Time& last_seen,
+                         std::uint32_t observations) {
+    DoorState s;
+    s.id = id;
+    s.wall_id = d.wall_id ? static_cast<std::uint32_t>(*d.wall_id) : 0;
+    s.state = static_cast<std::uint8_t>(d.state);
+    s.opening_angle = static_cast<float>(d.opening_angle_deg * M_PI / 180.0);
+    s.confidence = static_cast<float>(d.confidence);
+    s.angle_is_lower_bound = d.angle_is_lower_bound;
+    s.hinge = tf2::toMsg(d.hinge);
+    s.opening_center = tf2::toMsg(d.opening_center);
+    s.wall_normal.x = d.wall_normal.x();
+    s.wall_normal.y = d.wall_normal.y();
+    s.wall_normal.z = d.wall_normal.z();
+    s.width = static_cast<float>(d.width);
+    s.height = static_cast<float>(d.height);
+    s.clear_width = static_cast<float>(d.clear_width);
+    for (int k = 0; k < 4; ++k) s.leaf_corners[k] = tf2::toMsg(d.leaf_corners[k]);
+    s.last_seen = last_seen;
+    s.observations = observations;
+    return s;
+  }
+
+  // The cloud's doors into the fused tracks (fixed frame only); a warning
+  // (throttled) when the stamps went backwards or out of order.
+  void fuse(const dsr::PipelineResult& r, const std_msgs::Header& header, const dsr::Parameters& params,
+            const std::optional<Eigen::Vector3d>& sensor) {
+    // A relocalisation: the sensor's position in the fixed frame moved
+    // between two processed clouds by more than ~max_sensor_speed allows
+    // (plus kJumpSlack): the doors tracked before and those seen now are not
+    // in one frame any more; the tracks are reset (throttled warning). Not
+    // judged when the clouds arrive in the fixed frame (sensor unknown), nor
+    // across stamps going backwards (DoorFusion resets then anyway).
+    constexpr double kJumpSlack = 0.5;  // m
+    const double stamp = header.stamp.toSec();
+    if (sensor && last_sensor_ && max_sensor_speed_ > 0 && stamp >= last_sensor_stamp_) {
+      const double moved = (*sensor - *last_sensor_).norm();
+      const double allowed = kJumpSlack + max_sensor_speed_ * (stamp - last_sensor_stamp_);
+      if (moved > allowed) {
+        ++relocalisations_;
+        NODELET_WARN_THROTTLE(5.0, "door_state: the sensor moved %.2f m in the fixed frame '%s' in %.3f s (more than "
+                                   "~max_sensor_speed %.2f m/s allows): relocalisation; tracked_doors reset",
+                              moved, fixed_frame_.c_str(), stamp - last_sensor_stamp_, max_sensor_speed_);
+        noteError("relocalisation jump: tracked doors reset");
+        fusion_.reset();
+      }
+    }
+    if (sensor) {
+      last_sensor_ = sensor;
+      last_sensor_stamp_ = stamp;
+    }
+    dsr::FusionOptions fo = fusion_.options();
+    fo.closed_below_deg = params.closed_below_deg;
+    fo.open_from_deg = params.open_from_deg;
+    fo.leaf_thickness = params.leaf_thickness;
+    fusion_.setOptions(fo);  // the pipeline's thresholds, validated with it
+    const double newest = fusion_.newestStamp();
+    const dsr::DoorFusion::Update u = fusion_.update(r.doors, header.stamp.toSec(), r.up);
+    if (u.outcome == dsr::DoorFusion::Outcome::Reset) {
+      ++fusion_resets_;
+      NODELET_WARN_THROTTLE(5.0, "door_state: cloud stamped %.3f is %.3f s older than the newest fused (%.3f): "
+                                 "time went backwards (bag looped?); tracked_doors reset",
+                            header.stamp.toSec(), newest - header.stamp.toSec(), newest);
+      noteError("time went backwards: tracked doors reset");
+    } else if (u.outcome == dsr::DoorFusion::Outcome::IgnoredOutOfOrder) {
+      ++fusion_ignored_;
+      NODELET_WARN_THROTTLE(5.0, "door_state: cloud stamped %.3f is older than the newest fused (%.3f): "
+                                 "published in doors, not fused into tracked_doors",
+                            header.stamp.toSec(), newest);
+    }
+    DoorStateArrayPtr tracked = boost::make_shared<DoorStateArray>();
+    tracked->header = header;
+    for (const dsr::TrackedDoor& t : fusion_.tracks()) {
+      ros::Time seen = header.stamp;  // exactly the header's for a door this cloud shows
+      if (!t.seen_now) seen.fromSec(std::max(0.0, t.last_seen));
+      tracked->doors.push_back(toMsg(t.door, t.id, seen, t.observations));
+    }
+    tracked_count_ = tracked->doors.size();
+    pub_tracked_.publish(tracked);
+  }
+
+  // `sensor`: where the sensor was in the fixed frame (none: not known).
+  void publish(const dsr::PipelineResult& r, const std_msgs::Header& header, const dsr::Parameters& params,
+               const std::optional<Eigen::Vector3d>& sensor = std::nullopt) {
     std::vector<Eigen::Vector3d> centres;
     for (const auto& d : r.doors) centres.push_back(d.opening_center);
     // Matched across the pipeline's up vector (-y in a camera optical frame).
@@ -626,28 +745,14 @@ class DoorStateNodelet : public nodelet::Nodelet {
 
     DoorStateArrayPtr out = boost::make_shared<DoorStateArray>();
     out->header = header;
-    for (std::size_t i = 0; i < r.doors.size(); ++i) {
-      const dsr::DoorResult& d = r.doors[i];
-      DoorState s;
-      s.id = ids[i];
-      s.wall_id = d.wall_id ? static_cast<std::uint32_t>(*d.wall_id) : 0;
-      s.state = static_cast<std::uint8_t>(d.state);
-      s.opening_angle = static_cast<float>(d.opening_angle_deg * M_PI / 180.0);
-      s.confidence = static_cast<float>(d.confidence);
-      s.angle_is_lower_bound = d.angle_is_lower_bound;
-      s.hinge = tf2::toMsg(d.hinge);
-      s.opening_center = tf2::toMsg(d.opening_center);
-      s.wall_normal.x = d.wall_normal.x();
-      s.wall_normal.y = d.wall_normal.y();
-      s.wall_normal.z = d.wall_normal.z();
-      s.width = static_cast<float>(d.width);
-      s.height = static_cast<float>(d.height);
-      for (int k = 0; k < 4; ++k) s.leaf_corners[k] = tf2::toMsg(d.leaf_corners[k]);
-      out->doors.push_back(s);
-    }
+    for (std::size_t i = 0; i < r.doors.size(); ++i) out->doors.push_back(toMsg(r.doors[i], ids[i], header.stamp, 1));
     pub_doors_.publish(out);
-    if (pub_markers_.getNumSubscribers() > 0)
-      pub_markers_.publish(boost::make_shared<visualization_msgs::MarkerArray>(dsr::ros_io::makeMarkers(r, ids, header)));
+    if (!fixed_frame_.empty()) fuse(r, header, params, sensor);
+    if (pub_markers_.getNumSubscribers() > 0) {
+      auto markers = boost::make_shared<visualization_msgs::MarkerArray>(dsr::ros_io::makeMarkers(r, ids, header));
+      if (!fixed_frame_.empty()) dsr::ros_io::addTrackedMarkers(fusion_.tracks(), header, *markers);
+      pub_markers_.publish(markers);
+    }
     if (pub_walls_.getNumSubscribers() > 0) {
       sensor_msgs::PointCloud2Ptr walls = boost::make_shared<sensor_msgs::PointCloud2>();
       pcl::toROSMsg(r.reconstruction, *walls);
@@ -714,12 +819,18 @@ class DoorStateNodelet : public nodelet::Nodelet {
     stat.add("subscribed", subscribed_ ? "yes" : "no");
     stat.add("worker thread", worker_.joinable() ? "yes" : "no (processing in the callback)");
     stat.add("fixed frame", fixed_frame_.empty() ? std::string("(cloud frame)") : fixed_frame_);
+    if (!fixed_frame_.empty()) {
+      stat.add("tracked doors", tracked_count_.load());
+      stat.add("tracked doors reset (time went backwards)", fusion_resets_.load());
+      stat.add("clouds not fused (out of order)", fusion_ignored_.load());
+      stat.add("tracked doors reset (relocalisation)", relocalisations_.load());
+    }
   }
 
   ros::NodeHandle nh_, pnh_;
   std::string fixed_frame_;
   int tf_queue_size_ = 5;
-  ros::Publisher pub_doors_, pub_markers_, pub_walls_;
+  ros::Publisher pub_doors_, pub_markers_, pub_walls_, pub_tracked_;
   ros::Subscriber sub_;
   message_filters::Subscriber<sensor_msgs::PointCloud2> mf_sub_;
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
@@ -736,6 +847,12 @@ class DoorStateNodelet : public nodelet::Nodelet {
   std::string last_refusal_;
   ros::WallTime last_refusal_time_;
   dsr::DoorTracker tracker_;                        // worker only
+  dsr::DoorFusion fusion_;                          // worker only (fixed frame)
+  std::atomic<unsigned long> fusion_resets_{0}, fusion_ignored_{0}, relocalisations_{0};
+  double max_sensor_speed_ = 3.0;                   // m/s, ~max_sensor_speed
+  std::optional<Eigen::Vector3d> last_sensor_;      // worker only
+  double last_sensor_stamp_ = 0;
+  std::atomic<std::size_t> tracked_count_{0};
   pcl::PointCloud<pcl::PointXYZ> cloud_;            // worker only, reused between clouds
   // The one-cloud slot between the subscriber callback and the worker.
   std::mutex slot_mutex_;

@@ -41,6 +41,7 @@ std_msgs::ColorRGBA stateColour(DoorStateKind s) {
     case DoorStateKind::Closed: return rgba(0.9f, 0.15f, 0.15f);
     case DoorStateKind::SemiOpen: return rgba(1.0f, 0.6f, 0.0f);
     case DoorStateKind::Open: return rgba(0.2f, 0.8f, 0.2f);
+    case DoorStateKind::NotClosed: return rgba(0.95f, 0.9f, 0.1f);
   }
   return rgba(1, 1, 1);
 }
@@ -118,6 +119,40 @@ visualization_msgs::MarkerArray makeMarkers(const PipelineResult& r, const std::
     out.markers.push_back(rec);
   }
   return out;
+}
+
+void addTrackedMarkers(const std::vector<TrackedDoor>& tracks, const std_msgs::Header& h,
+                       visualization_msgs::MarkerArray& out) {
+  for (const TrackedDoor& t : tracks) {
+    const DoorResult& d = t.door;
+    std_msgs::ColorRGBA colour = stateColour(d.state);
+    if (!t.seen_now) {
+      colour.r = 0.5f * (colour.r + 0.6f);
+      colour.g = 0.5f * (colour.g + 0.6f);
+      colour.b = 0.5f * (colour.b + 0.6f);
+      colour.a = 0.35f;
+    }
+    const int id = static_cast<int>(t.id);
+    auto leaf = base(h, "tracked_leaf_lines", id, visualization_msgs::Marker::LINE_LIST);
+    leaf.scale.x = 0.06;
+    leaf.color = colour;
+    leaf.points.push_back(pt(d.leaf_corners[0]));
+    leaf.points.push_back(pt(d.leaf_corners[1]));
+    leaf.points.push_back(pt(d.leaf_corners[0]));
+    leaf.points.push_back(pt(d.leaf_corners[3]));
+    out.markers.push_back(leaf);
+
+    auto label = base(h, "tracked_labels", id, visualization_msgs::Marker::TEXT_VIEW_FACING);
+    label.scale.z = 0.2;
+    label.color = colour;
+    label.pose.position = pt(0.5 * (d.leaf_corners[2] + d.leaf_corners[3]) + Eigen::Vector3d(0, 0, 0.25));
+    char text[128];
+    std::snprintf(text, sizeof text, "tracked %u: %s %s%.0f deg, %u obs%s", t.id, toString(d.state),
+                  d.angle_is_lower_bound ? ">= " : "", d.opening_angle_deg, t.observations,
+                  t.seen_now ? "" : " (not in view)");
+    label.text = text;
+    out.markers.push_back(label);
+  }
 }
 
 }  // namespace ros_io

@@ -182,8 +182,9 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       const double t = thicknessOf(d);
       LeafFit leaf = cand.leaf;
       // A leaf not seen, in a doorway seen through, that free space puts at
-      // unseen_leaf_min_bound_deg or more (default 90: the door is open, by
-      // at least that bound).
+      // unseen_leaf_min_bound_deg or more (never below closed_below_deg: the
+      // door is not closed): reported at the bound, NOT_CLOSED below
+      // open_from_deg and OPEN from it (stateOfBound; issue 20).
       const bool open_unseen = !leaf.found && std::isfinite(leaf.free_from_deg) &&
                                leaf.free_from_deg >= std::max(p.unseen_leaf_min_bound_deg, p.closed_below_deg) &&
                                leaf.free_from_deg <= 170;
@@ -281,7 +282,7 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       door.wall_id = static_cast<int>(wi);
       door.opening_angle_deg = leaf.angle_deg;
       door.angle_is_lower_bound = open_unseen;
-      door.state = classify(leaf.angle_deg, p);
+      door.state = open_unseen ? stateOfBound(leaf.angle_deg, p) : classify(leaf.angle_deg, p);
       // Confidence: how much of the leaf was seen, and how sure the doorway is.
       door.confidence = open_unseen ? kUnseenLeafConfidence
                                     : std::min(1.0, leaf.coverage) * (d.casing || d.through >= 0.4 ? 1.0 : 0.7);
@@ -293,6 +294,9 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       door.opening_center = toInput(onFloor(center));
       door.width = std::abs(leaf.s_latch - leaf.s_hinge);
       door.height = height;
+      door.clear_width = door.state == DoorStateKind::Closed
+                             ? 0.0
+                             : clearWidth(door.width, leaf.angle_deg, p.leaf_thickness, p.closed_below_deg);
       const double bottom = floor_z + 0.01, top = std::max(leaf.top_z, floor_z + 0.5);
       const Eigen::Vector2d latch = leaf.hinge + leaf.length * leaf.direction;
       door.leaf_corners = {toInput(Eigen::Vector3d(leaf.hinge.x(), leaf.hinge.y(), bottom)),

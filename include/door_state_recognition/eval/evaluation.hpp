@@ -18,10 +18,21 @@ struct DoorMatch {
   double angle_error_deg;    // |reported - true| opening angle
   double hinge_error_m;      // 3D distance between hinges
   bool angle_is_lower_bound = false;  // the report gave the angle as a lower bound (leaf unseen)
+  bool not_closed = false;            // the report's state was "not_closed" (never a right state)
+  bool bound_error = false;           // a lower bound above the true angle by more than kBoundSlackDeg
 };
+
+// A lower bound may exceed the true angle by the step of its search (2 deg,
+// state/door_state.cpp) without being wrong; beyond that it is a bound error.
+constexpr double kBoundSlackDeg = 2.0;
 
 struct EvalResult {
   int true_doors = 0, reported_doors = 0, matched = 0, state_correct = 0;
+  // Reports (counted in reported_doors) whose state was "not_closed": found
+  // when matched (recall), never a right state.
+  int not_closed = 0;
+  // Matches whose angle was a lower bound above the true angle (+ kBoundSlackDeg).
+  int bound_errors = 0;
   std::vector<DoorMatch> matches;     // sorted by truth_index (per scene)
   std::vector<int> missed_truth;      // truth indices without a match
   std::vector<int> unmatched_report;  // report indices without a match (false positives)
@@ -29,6 +40,9 @@ struct EvalResult {
   double precision() const;          // matched / reported; 1.0 when reported == 0
   double recall() const;             // matched / true; 1.0 when true == 0
   double stateAccuracy() const;      // state_correct / matched; NaN when matched == 0
+  // The same over the matches whose leaf was measured (angle not a lower
+  // bound); NaN when none.
+  double stateAccuracyMeasured() const;
   double angleMaeDeg() const;        // mean angle error; NaN when no matches
   // Mean angle error over the matches whose angle was measured (not given
   // as a lower bound); NaN when none. angleMaeDeg() counts every match.
@@ -52,7 +66,10 @@ struct EvalResult {
 EvalResult evaluate(const nlohmann::json& truth, const nlohmann::json& report,
                     double max_center_distance_m = 0.5, bool in_view_only = false);
 
-// Counts, the six figures (NaN -> null), matches, missed_truth, unmatched_report.
+// Counts (with not_closed and bound_errors), the figures (NaN -> null;
+// state_accuracy_measured too), matches, missed_truth, unmatched_report.
+// A report whose state is "not_closed" counts as found when it matches a
+// true door, and never as a right state.
 nlohmann::json toJson(const EvalResult& result);
 
 // Sums several results: counts add up; matches, missed_truth and

@@ -55,10 +55,11 @@ struct Parameters {
   double open_from_deg = 90.0;       // open: angle >= this; semi-open in between
   // A doorway seen through whose leaf is out of sight is a door when free
   // space bounds its opening angle from below at this or more (reported with
-  // the bound as its angle, angle_is_lower_bound, state from the bound).
-  // 90: only doors sure to be open; closed_below_deg: every one sure not to
-  // be closed, semi-open or open unknown.
-  double unseen_leaf_min_bound_deg = 90.0;
+  // the bound as its angle, angle_is_lower_bound; state NOT_CLOSED below
+  // open_from_deg, OPEN from it). Taken as at least closed_below_deg.
+  // 5 (closed_below_deg, the default): every such door, which is surely not
+  // closed (issue 20's decision); 90: only doors sure to be open.
+  double unseen_leaf_min_bound_deg = 5.0;
   // --- reconstruction ---------------------------------------------------------
   double reconstruction_spacing = 0.02;  // m between up-sampled points
   // --- misc -------------------------------------------------------------------

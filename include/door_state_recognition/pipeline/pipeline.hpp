@@ -25,7 +25,10 @@
 
 namespace dsr {
 
-enum class DoorStateKind { Closed = 0, SemiOpen = 1, Open = 2 };
+// NotClosed: rays pass through the doorway but its leaf was not seen; free
+// space bounds the opening angle from below, under open_from_deg (semi-open
+// and open cannot be told). The values are those of DoorState.msg.
+enum class DoorStateKind { Closed = 0, SemiOpen = 1, Open = 2, NotClosed = 3 };
 const char* toString(DoorStateKind s);
 enum class Swing { TowardViewer, AwayFromViewer, Unknown };
 const char* toString(Swing s);
@@ -45,18 +48,38 @@ struct DoorResult {
   DoorStateKind state = DoorStateKind::Closed;
   double opening_angle_deg = 0;
   // The leaf was not seen: free space puts it at opening_angle_deg or more
-  // (at least unseen_leaf_min_bound_deg; the state is the bound's), e.g.
-  // swung behind its wall out of the sensor's sight.
+  // (at least unseen_leaf_min_bound_deg), e.g. swung behind its wall out of
+  // the sensor's sight. The state is then NotClosed below open_from_deg,
+  // Open from it (stateOfBound).
   bool angle_is_lower_bound = false;
   double confidence = 0;
   Eigen::Vector3d hinge, opening_center;
   Eigen::Vector3d wall_normal;  // horizontal unit, towards the side the leaf swings to
   double width = 0, height = 0;
+  // The free passage through the doorway as observed, metres (clearWidth):
+  // the doorway's width less what the leaf takes at its angle; for a bound
+  // (angle_is_lower_bound) what a leaf at the bound leaves, so at least this.
+  double clear_width = 0;
   std::array<Eigen::Vector3d, 4> leaf_corners;  // hinge-bottom, latch-bottom, latch-top, hinge-top
   Swing swing = Swing::Unknown;
   // Fitted lines on the floor plane (the paper's 3.3.2), for display.
   Eigen::Vector3d wall_line_point, wall_line_direction, leaf_line_point, leaf_line_direction;
 };
+
+// The free passage width (m) a leaf leaves in its doorway, seen along the
+// doorway's normal (what passes straight through): a leaf of length `width`
+// and thickness `leaf_thickness` hinged at one jamb and swung by `angle_deg`
+// from closed takes width*cos(angle) + leaf_thickness*sin(angle) of the
+// doorway (cos clamped at 0 past 90 deg: the leaf then stands outside the
+// doorway but for its thickness at the hinge), so
+//   clear_width = max(0, width - width*max(0, cos(angle)) - leaf_thickness*sin(angle)),
+// and 0 for a closed door (angle < closed_below_deg). At 90 deg: width -
+// leaf_thickness; at 180: width. Non-finite or negative input gives 0.
+double clearWidth(double width, double angle_deg, double leaf_thickness, double closed_below_deg);
+
+// The state of a door whose leaf was not seen and whose angle free space
+// bounds from below at `bound_deg`: NotClosed below open_from_deg, Open from it.
+DoorStateKind stateOfBound(double bound_deg, const Parameters& p);
 
 struct SegmentResult {  // a region of region growing that is neither wall nor door
   int id = 0;

@@ -1,0 +1,291 @@
+// DoorFusion (issue 20): door states fused over the processed clouds of a
+// drive, in a fixed frame. Doors are built by hand (what the pipeline
+// reports in a fixed frame); each test names the rule of
+// include/door_state_recognition/tracking/door_fusion.hpp it checks.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+#include <stdexcept>
+#include <vector>
+
+#include "door_state_recognition/tracking/door_fusion.hpp"
+
+using dsr::DoorFusion;
+using dsr::DoorResult;
+using dsr::DoorStateKind;
+using dsr::FusionOptions;
+using dsr::TrackedDoor;
+
+namespace {
+
+// A door in the fixed frame (z up) on a wall along `wall`, its opening centre at `c`.
+DoorResult door(const Eigen::Vector3d& c, double angle_deg, bool bound = false, double confidence = 0.6,
+                const Eigen::Vector3d& wall = Eigen::Vector3d::UnitX()) {
+  DoorResult d;
+  d.opening_center = c;
+  d.hinge = c - 0.45 * wall;
+  d.opening_angle_deg = angle_deg;
+  d.angle_is_lower_bound = bound;
+  d.state = bound ? (angle_deg >= 90 ? DoorStateKind::Open : DoorStateKind::NotClosed)
+                  : angle_deg < 5 ? DoorStateKind::Closed
+                  : angle_deg < 90 ? DoorStateKind::SemiOpen
+                                   : DoorStateKind::Open;
+  d.confidence = bound ? 0.3 : confidence;
+  d.width = 0.9;
+  d.height = 2.0;
+  d.clear_width = dsr::clearWidth(d.width, angle_deg, 0.04, 5.0);
+  d.wall_line_point = c;
+  d.wall_line_direction = wall;
+  d.wall_normal = Eigen::Vector3d::UnitZ().cross(wall);
+  return d;
+}
+
+const TrackedDoor* byId(const DoorFusion& f, std::uint32_t id) {
+  for (const TrackedDoor& t : f.tracks())
+    if (t.id == id) return &t;
+  return nullptr;
+}
+
+const Eigen::Vector3d kA(1, 0, 0), kB(4, 0, 0);
+
+}  // namespace
+
+TEST(DoorFusion, AMeasuredLeafBeatsABoundAndABoundNeverReplacesAMeasuredLeaf) {
+  DoorFusion f;
+  const auto u0 = f.update({door(kA, 40, true)}, 1.0);
+  ASSERT_EQ(f.tracks().size(), 1u);
+  EXPECT_EQ(f.tracks()[0].door.state, DoorStateKind::NotClosed);
+  EXPECT_TRUE(f.tracks()[0].door.angle_is_lower_bound);
+  // The leaf comes into sight: measured at 110 deg (below the 40 deg bound's +20
+  // or not, a measurement beats a bound at once).
+  f.update({door(kA, 110)}, 2.0);
+  ASSERT_EQ(f.tracks().size(), 1u);
+  EXPECT_EQ(f.tracks()[0].id, u0.ids[0]);
+  EXPECT_FALSE(f.tracks()[0].door.angle_is_lower_bound);
+  EXPECT_DOUBLE_EQ(f.tracks()[0].door.opening_angle_deg, 110);
+  EXPECT_EQ(f.tracks()[0].door.state, DoorStateKind::Open);
+  // Out of sight again, bounded at 60 (consistent with 110): the measurement stays.
+  f.update({door(kA, 60, true)}, 3.0);
+  EXPECT_FALSE(f.tracks()[0].door.angle_is_lower_bound);
+  EXPECT_DOUBLE_EQ(f.tracks()[0].door.opening_angle_deg, 110);
+  EXPECT_EQ(f.tracks()[0].observations, 3u);
+  EXPECT_DOUBLE_EQ(f.tracks()[0].last_seen, 3.0);
+  EXPECT_DOUBLE_EQ(f.tracks()[0].first_seen, 1.0);
+}
+
+TEST(DoorFusion, BoundsFromSeveralPositionsCombineAndReachOpen) {
+  DoorFusion f;
+  f.update({door(kA, 44, true)}, 1.0);
+  f.update({door(kA, 30, true)}, 2.0);  // a lower bound from elsewhere says less: 44 holds
+  ASSERT_EQ(f.tracks().size(), 1u);
+  EXPECT_DOUBLE_EQ(f.tracks()[0].door.opening_angle_deg, 44);
+  EXPECT_EQ(f.tracks()[0].door.state, DoorStateKind::NotClosed);
+  f.update({door(kA, 72, true)}, 3.0);
+  EXPECT_DOUBLE_EQ(f.tracks()[0].door.opening_angle_deg, 72);
+  EXPECT_EQ(f.tracks()[0].door.state, DoorStateKind::NotClosed);
+  const double narrow = f.tracks()[0].door.clear_width;
+  f.update({door(kA, 96, true)}, 4.0);  // the combined bound reaches open_from_deg
+  EXPECT_DOUBLE_EQ(f.tracks()[0].door.opening_angle_deg, 96);
+  EXPECT_EQ(f.tracks()[0].door.state, DoorStateKind::Open);
+  EXPECT_TRUE(f.tracks()[0].door.angle_is_lower_bound);
+  EXPECT_GT(f.tracks()[0].door.clear_width, narrow);
+  EXPECT_EQ(f.tracks()[0].observations, 4u);
+  // The fusion's own open_from_deg decides the state of a combined bound.
+  FusionOptions o;
+  o.open_from_deg = 100;
+  DoorFusion g(o);
+  g.update({door(kA, 96, true)}, 1.0);
+  EXPECT_EQ(g.tracks()[0].door.state, DoorStateKind::NotClosed);
+}
+
+TEST(DoorFusion, AStateChangeTakesOverWithinTwoClouds) {
+  DoorFusion f;  // state_change_deg 20, sure_confidence 0.9
+  for (int k = 0; k < 5; ++k) f.update({door(kA, 0, false, 0.8)}, 1.0 + k);
+  ASSERT_EQ(f.tracks()[0].door.state, DoorStateKind::Closed);
+  // The door is opened to 60 deg: the first cloud that shows it keeps the
+  // old state pending, the second takes it over.
+  f.update({door(kA, 60, false, 0.7)}, 10.0);
+  EXPECT_EQ(f.tracks()[0].door.state, DoorStateKind::Closed);
+  f.update({door(kA, 62, false, 0.7)}, 11.0);
+  EXPECT_EQ(f.tracks()[0].door.state, DoorStateKind::SemiOpen);
+  EXPECT_NEAR(f.tracks()[0].door.opening_angle_deg, 62, 1e-12);
+  // Closed again, seen surely (confidence >= sure_confidence): at once.
+  f.update({door(kA, 0, false, 0.95)}, 12.0);
+  EXPECT_EQ(f.tracks()[0].door.state, DoorStateKind::Closed);
+  // Opened and then swung out of sight: two bounds far above the closed
+  // leaf confirm each other (the larger holds).
+  f.update({door(kA, 70, true)}, 13.0);
+  EXPECT_EQ(f.tracks()[0].door.state, DoorStateKind::Closed);
+  f.update({door(kA, 96, true)}, 14.0);
+  EXPECT_EQ(f.tracks()[0].door.state, DoorStateKind::Open);
+  EXPECT_TRUE(f.tracks()[0].door.angle_is_lower_bound);
+  EXPECT_DOUBLE_EQ(f.tracks()[0].door.opening_angle_deg, 96);
+  // Clouds that do not show the door leave a departure pending.
+  DoorFusion g;
+  g.update({door(kA, 10, false, 0.8)}, 1.0);
+  g.update({door(kA, 80, false, 0.6)}, 2.0);
+  g.update({door(kB, 0, false, 0.6)}, 3.0);  // another door only
+  EXPECT_DOUBLE_EQ(g.tracks()[0].door.opening_angle_deg, 10);
+  g.update({door(kA, 78, false, 0.6)}, 4.0);
+  EXPECT_DOUBLE_EQ(g.tracks()[0].door.opening_angle_deg, 78);
+}
+
+TEST(DoorFusion, ASingleNoisyOutlierDoesNotFlipTheState) {
+  DoorFusion f;
+  f.update({door(kA, 30, false, 0.8)}, 1.0);
+  f.update({door(kA, 110, false, 0.7)}, 2.0);  // one cloud off by 80 deg
+  f.update({door(kA, 31, false, 0.7)}, 3.0);   // back in agreement: the departure is dropped
+  f.update({door(kA, 108, false, 0.7)}, 4.0);  // another lone outlier, not confirmed by the last
+  EXPECT_EQ(f.tracks()[0].door.state, DoorStateKind::SemiOpen);
+  EXPECT_NEAR(f.tracks()[0].door.opening_angle_deg, 30, 1.5);
+  // Two departures that disagree with each other confirm nothing.
+  f.update({door(kA, 3, false, 0.7)}, 5.0);
+  EXPECT_EQ(f.tracks()[0].door.state, DoorStateKind::SemiOpen);
+  // Agreeing measurements within state_change_deg keep the most confident.
+  f.update({door(kA, 34, false, 0.85)}, 6.0);
+  EXPECT_DOUBLE_EQ(f.tracks()[0].door.opening_angle_deg, 34);
+  f.update({door(kA, 45, false, 0.5)}, 7.0);
+  EXPECT_DOUBLE_EQ(f.tracks()[0].door.opening_angle_deg, 34);
+  EXPECT_EQ(f.tracks()[0].observations, 7u);
+}
+
+TEST(DoorFusion, IdsAreStableOnePerDoorOverADrive) {
+  DoorFusion f;
+  // Two doors 3 m apart on one wall and one on a wall square to it, 0.3 m
+  // from the first: seen from a moving robot, the centres wander by up to
+  // 0.2 m and the heights differ (a camera's floor estimate).
+  const Eigen::Vector3d kC(1.3, 0.3, 0);
+  std::set<std::uint32_t> ids;
+  for (int k = 0; k < 20; ++k) {
+    const double w = 0.2 * std::sin(k * 1.3);
+    std::vector<DoorResult> doors;
+    if (k % 3 != 0) doors.push_back(door(kA + Eigen::Vector3d(w, 0.5 * w, 0.3 * w), 30));
+    if (k % 2 == 0) doors.push_back(door(kB + Eigen::Vector3d(-w, 0, 0), 0));
+    if (k > 5) doors.push_back(door(kC + Eigen::Vector3d(0, w, 0), 90, false, 0.6, Eigen::Vector3d::UnitY()));
+    const auto u = f.update(doors, 1.0 + k);
+    for (std::size_t i = 0; i < doors.size(); ++i) {
+      EXPECT_TRUE(u.tracked[i]);
+      ids.insert(u.ids[i]);
+    }
+  }
+  EXPECT_EQ(ids.size(), 3u);
+  EXPECT_EQ(f.tracks().size(), 3u);
+  // A door first seen 0.45 m off its later position along the wall (two
+  // tracks for a while) is joined into the older id once the centres come
+  // within match_distance_m.
+  DoorFusion g;
+  const auto first = g.update({door(kA, 30)}, 1.0);
+  g.update({door(kA + Eigen::Vector3d(0.7, 0, 0), 30)}, 2.0);  // too far: a second track
+  ASSERT_EQ(g.tracks().size(), 2u);
+  for (int k = 0; k < 4; ++k) g.update({door(kA + Eigen::Vector3d(0.3, 0, 0), 30)}, 3.0 + k);
+  ASSERT_EQ(g.tracks().size(), 1u);
+  EXPECT_EQ(g.tracks()[0].id, first.ids[0]);
+  EXPECT_EQ(g.tracks()[0].observations, 6u);
+}
+
+TEST(DoorFusion, TwoDoorsSeenInOneCloudAreNeverOne) {
+  DoorFusion f;
+  // Two doors 0.45 m apart in one cloud (a double door): two tracks.
+  const auto u = f.update({door(kA, 30), door(kA + Eigen::Vector3d(0.45, 0, 0), 0)}, 1.0);
+  EXPECT_NE(u.ids[0], u.ids[1]);
+  f.update({door(kA, 30), door(kA + Eigen::Vector3d(0.45, 0, 0), 0)}, 2.0);
+  EXPECT_EQ(f.tracks().size(), 2u);
+}
+
+TEST(DoorFusion, ADoorNotSeenForForgetAfterIsForgotten) {
+  FusionOptions o;
+  o.forget_after_s = 10;
+  DoorFusion f(o);
+  const auto u = f.update({door(kA, 30), door(kB, 0)}, 100.0);
+  for (int k = 1; k <= 10; ++k) f.update({door(kB, 0)}, 100.0 + k);
+  // At 110 s door A was last seen 10 s ago: kept, not seen now.
+  ASSERT_NE(byId(f, u.ids[0]), nullptr);
+  EXPECT_FALSE(byId(f, u.ids[0])->seen_now);
+  EXPECT_TRUE(byId(f, u.ids[1])->seen_now);
+  EXPECT_DOUBLE_EQ(byId(f, u.ids[0])->last_seen, 100.0);
+  const auto later = f.update({door(kB, 0)}, 110.5);
+  EXPECT_EQ(byId(f, u.ids[0]), nullptr);
+  EXPECT_EQ(later.forgotten, 1u);
+  EXPECT_NE(byId(f, u.ids[1]), nullptr);
+  // Seen again later: a new track, a new id.
+  const auto again = f.update({door(kA, 30), door(kB, 0)}, 111.0);
+  EXPECT_NE(again.ids[0], u.ids[0]);
+  EXPECT_EQ(again.ids[1], u.ids[1]);
+}
+
+TEST(DoorFusion, TimeGoingBackwardsResetsAndOutOfOrderCloudsAreIgnored) {
+  DoorFusion f;  // backwards_tolerance_s 1
+  const auto u = f.update({door(kA, 30), door(kB, 0)}, 50.0);
+  f.update({door(kA, 30)}, 51.0);
+  // Out of order within the tolerance: ignored, last_seen does not move back.
+  const auto late = f.update({door(kA, 80, false, 0.95)}, 50.5);
+  EXPECT_EQ(late.outcome, DoorFusion::Outcome::IgnoredOutOfOrder);
+  EXPECT_FALSE(late.tracked[0]);
+  ASSERT_EQ(f.tracks().size(), 2u);
+  EXPECT_DOUBLE_EQ(byId(f, u.ids[0])->last_seen, 51.0);
+  EXPECT_DOUBLE_EQ(byId(f, u.ids[0])->door.opening_angle_deg, 30);
+  EXPECT_EQ(byId(f, u.ids[0])->observations, 2u);
+  EXPECT_FALSE(byId(f, u.ids[0])->seen_now);
+  // A NaN stamp: ignored.
+  EXPECT_EQ(f.update({door(kA, 30)}, std::nan("")).outcome, DoorFusion::Outcome::IgnoredBadStamp);
+  EXPECT_EQ(f.tracks().size(), 2u);
+  // The bag starts again at 10 s: every track dropped, this cloud starts anew.
+  const auto reset = f.update({door(kB, 0)}, 10.0);
+  EXPECT_EQ(reset.outcome, DoorFusion::Outcome::Reset);
+  ASSERT_EQ(f.tracks().size(), 1u);
+  EXPECT_EQ(f.tracks()[0].observations, 1u);
+  EXPECT_DOUBLE_EQ(f.tracks()[0].last_seen, 10.0);
+  EXPECT_NE(reset.ids[0], u.ids[1]) << "ids are not reused after a reset";
+  EXPECT_DOUBLE_EQ(f.newestStamp(), 10.0);
+  EXPECT_EQ(f.update({door(kB, 0)}, 11.0).outcome, DoorFusion::Outcome::Fused);
+  EXPECT_EQ(f.tracks()[0].observations, 2u);
+}
+
+TEST(DoorFusion, MalformedDoorsAndOptionsAreRefusedCleanly) {
+  DoorFusion f;
+  DoorResult nan_centre = door(kA, 30);
+  nan_centre.opening_center.x() = std::nan("");
+  DoorResult no_wall = door(kB, 30);
+  no_wall.wall_line_direction = Eigen::Vector3d::UnitZ();  // nothing across up
+  DoorResult nan_angle = door(Eigen::Vector3d(8, 0, 0), std::nan(""));
+  const auto u = f.update({nan_centre, no_wall, nan_angle, door(Eigen::Vector3d(12, 0, 0), 10)}, 1.0,
+                          Eigen::Vector3d::Zero());  // a zero up: +z
+  EXPECT_FALSE(u.tracked[0]);
+  EXPECT_FALSE(u.tracked[1]);
+  EXPECT_FALSE(u.tracked[2]);
+  EXPECT_TRUE(u.tracked[3]);
+  EXPECT_EQ(f.tracks().size(), 1u);
+  using Spoil = void (*)(FusionOptions&);
+  for (Spoil bad : std::vector<Spoil>{+[](FusionOptions& o) { o.forget_after_s = 0; },
+                                      +[](FusionOptions& o) { o.state_change_deg = -1; },
+                                      +[](FusionOptions& o) { o.match_distance_m = std::nan(""); },
+                                      +[](FusionOptions& o) { o.open_from_deg = 3; }}) {
+    FusionOptions o;
+    bad(o);
+    EXPECT_THROW(DoorFusion{o}, std::invalid_argument);
+    EXPECT_THROW(f.setOptions(o), std::invalid_argument);
+  }
+  EXPECT_EQ(f.tracks().size(), 1u);
+}
+
+TEST(ClearWidth, TheDoorwayLessWhatTheLeafTakes) {
+  // width*(1 - max(0, cos a)) - thickness*sin a, 0 when closed.
+  EXPECT_DOUBLE_EQ(dsr::clearWidth(0.9, 0, 0.04, 5), 0.0);
+  EXPECT_DOUBLE_EQ(dsr::clearWidth(0.9, 4.9, 0.04, 5), 0.0);
+  EXPECT_NEAR(dsr::clearWidth(0.9, 90, 0.04, 5), 0.86, 1e-12);
+  EXPECT_NEAR(dsr::clearWidth(0.9, 180, 0.04, 5), 0.9, 1e-12);
+  EXPECT_NEAR(dsr::clearWidth(0.9, 60, 0.04, 5), 0.9 - 0.45 - 0.04 * std::sin(M_PI / 3), 1e-12);
+  EXPECT_NEAR(dsr::clearWidth(0.9, 120, 0.04, 5), 0.9 - 0.04 * std::sin(2 * M_PI / 3), 1e-12);
+  // A leaf barely ajar with a thick leaf leaves nothing, never a negative width.
+  EXPECT_DOUBLE_EQ(dsr::clearWidth(0.9, 6, 0.3, 5), 0.0);
+  EXPECT_DOUBLE_EQ(dsr::clearWidth(std::nan(""), 60, 0.04, 5), 0.0);
+  EXPECT_DOUBLE_EQ(dsr::clearWidth(0.9, std::nan(""), 0.04, 5), 0.0);
+  // Grows with the angle up to 180 deg.
+  double last = -1;
+  for (int a = 5; a <= 180; a += 5) {
+    const double w = dsr::clearWidth(0.9, a, 0.04, 5);
+    EXPECT_GE(w, last - 1e-12) << a << " deg";
+    last = w;
+  }
+}
