@@ -127,7 +127,7 @@ TEST(Sight, WithoutAViewpointAMergedRoomGetsItsDoors) {
   SCOPED_TRACE(log.str());
   EXPECT_GE(sum.precision(), 0.95);
   EXPECT_GE(sum.recall(), 0.8);
-  EXPECT_GE(sum.stateAccuracy(), 0.95);
+  EXPECT_GE(sum.stateAccuracyMeasured(), 0.95);
   EXPECT_LE(sum.angleMaeMeasuredDeg(), 3.0);
 }
 

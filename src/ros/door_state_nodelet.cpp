@@ -177,6 +177,12 @@ std::vector<std::string> checkPrivateParameters(const ros::NodeHandle& pnh) {
       if (v.getType() != XmlRpc::XmlRpcValue::TypeString) problems.push_back(pname + " is " + got + ": must be a frame name (a string), empty for the cloud's own frame");
       continue;
     }
+    if (name == "viewpoint") {
+      if (v.getType() != XmlRpc::XmlRpcValue::TypeString ||
+          (static_cast<std::string>(v) != "sensor" && static_cast<std::string>(v) != "none"))
+        problems.push_back(pname + " is " + got + ": must be 'sensor' (rays from the cloud frame's origin) or 'none' (a map: no viewpoint)");
+      continue;
+    }
     if (name == "tf_queue_size") {
       if (v.getType() != XmlRpc::XmlRpcValue::TypeInt || static_cast<int>(v) < 1) problems.push_back(pname + " is " + got + ": must be an int >= 1");
       continue;
@@ -202,7 +208,7 @@ std::vector<std::string> checkPrivateParameters(const ros::NodeHandle& pnh) {
     }
     const auto c = cfg.find(name);
     if (c == cfg.end()) {
-      problems.push_back(pname + ": unknown parameter (the pipeline's are those of config/default.yaml; the nodelet's own are fixed_frame, tf_queue_size, diagnostic_period, forget_after_s, state_change_deg, max_sensor_speed)");
+      problems.push_back(pname + ": unknown parameter (the pipeline's are those of config/default.yaml; the nodelet's own are fixed_frame, viewpoint, tf_queue_size, diagnostic_period, forget_after_s, state_change_deg, max_sensor_speed)");
       continue;
     }
     const std::string& type = c->second->type;
@@ -369,6 +375,12 @@ class DoorStateNodelet : public nodelet::Nodelet {
       return;
     }
     pnh_.param<std::string>("fixed_frame", fixed_frame_, "");
+    // sensor: free space by rays from the cloud frame's origin (through tf
+    // into the fixed frame); none: an accumulated map or registered cloud,
+    // whose stations are inferred from its surfaces (checked above).
+    std::string viewpoint;
+    pnh_.param<std::string>("viewpoint", viewpoint, "sensor");
+    without_viewpoint_ = viewpoint == "none";
     pnh_.param("tf_queue_size", tf_queue_size_, 5);
     if (tf_queue_size_ < 1) tf_queue_size_ = 1;
     {
@@ -621,7 +633,8 @@ class DoorStateNodelet : public nodelet::Nodelet {
       viewpoint = T.translation();
       out_header.frame_id = fixed_frame_;
     }
-    const dsr::PipelineResult result = pipeline->run(cloud_, wantWalls(), viewpoint);
+    const dsr::PipelineResult result =
+        without_viewpoint_ ? pipeline->runWithoutViewpoint(cloud_, wantWalls()) : pipeline->run(cloud_, wantWalls(), viewpoint);
     if (!result.warnings.empty()) {
       std::string all;
       for (const auto& w : result.warnings) all += (all.empty() ? "" : "; ") + w;
@@ -829,6 +842,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
 
   ros::NodeHandle nh_, pnh_;
   std::string fixed_frame_;
+  bool without_viewpoint_ = false;  // ~viewpoint none
   int tf_queue_size_ = 5;
   ros::Publisher pub_doors_, pub_markers_, pub_walls_, pub_tracked_;
   ros::Subscriber sub_;

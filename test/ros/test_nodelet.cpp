@@ -4,6 +4,7 @@
 //   tf      the nodelet works in the fixed frame `map`
 //   bag     a simulated bag is played by rosbag; ~truth is its ground truth
 //   bad_params  /door_state was given bad ~ parameters, /door_state_good good ones
+//   map     the nodelet has ~viewpoint none and ~fixed_frame map: a registered cloud in `map`
 #include <gtest/gtest.h>
 #include <pcl_conversions/pcl_conversions.h>
 #include <ros/ros.h>
@@ -233,6 +234,29 @@ TEST_F(NodeletTest, DoorsOfASimulatedScanMatchTheTruthWithStableIdsAndMarkers) {
   }
   for (const char* ns : {"wall_corners", "wall_lines", "door_corners", "leaf_lines", "labels", "reconstruction"})
     EXPECT_TRUE(namespaces.count(ns)) << "no marker in namespace " << ns;
+}
+
+// A map: a room scanned from three stations, merged into one cloud in
+// `map` (the simulator's world), as a registered room or an accumulated map
+// is published. With ~viewpoint none the nodelet infers where free space
+// was seen from; each door of the room is reported in its state.
+TEST_F(NodeletTest, AMergedRoomInTheMapFrameWithoutAViewpointGetsItsDoors) {
+  if (g_mode != "map") GTEST_SKIP();
+  listen();
+  SimScan s;
+  s.scene = sim::buildScene(sim::paperRoom("paper_multidoor"));
+  sim::TlsOptions o;
+  o.points = 600000;
+  o.viewpoints = 3;
+  o.seed = 11;
+  s.cloud = sim::scanTls(s.scene, o);
+  s.truth = sim::groundTruthJson(s.scene, s.cloud);
+  sim::SimulatedCloud in_map = s.cloud;
+  for (auto& q : in_map.cloud.points) q.getVector3fMap() = (s.cloud.sensor_to_world * q.getVector3fMap().cast<double>()).cast<float>();
+  DoorStateArray answer;
+  ASSERT_TRUE(send(toMsg(in_map, "map", 20.0), &answer)) << "no DoorStateArray for the map";
+  EXPECT_EQ(answer.header.frame_id, "map");
+  expectMatchesTruth(answer, s.truth, s.cloud.sensor_to_world);
 }
 
 namespace {
