@@ -6,7 +6,7 @@ import numpy as np
 import rospy
 from door_state_recognition.msg import DoorStateArray
 
-STATES = {0: "closed", 1: "semi_open", 2: "open"}
+STATES = {0: "closed", 1: "semi_open", 2: "open", 3: "not_closed"}
 
 def main():
     truth = json.load(open(sys.argv[1]))
@@ -29,7 +29,7 @@ def main():
                        default=None)
             found = "not found"
             if best and math.hypot(best.opening_center.x - centre[0], best.opening_center.y - centre[1]) < 0.5:
-                found = (f"id {best.id}: {STATES[best.state]} {math.degrees(best.opening_angle):.1f} deg "
+                found = (f"id {best.id}: {STATES.get(best.state, best.state)} {'>= ' if best.angle_is_lower_bound else ''}{math.degrees(best.opening_angle):.1f} deg "
                          f"(confidence {best.confidence:.2f})")
             print(f"   truth {d['state']:9s} {d['opening_angle_deg']:6.1f} deg   ->   {found}")
         if len(got) >= want:

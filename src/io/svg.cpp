@@ -155,8 +155,9 @@ std::string planSvg(const PipelineResult& r, const std::vector<const pcl::PointC
   const double margin = 20, top = 40, bottom = 70;
   const double s = std::max(
       1.0, std::min((opt.max_width_px - 2 * margin) / wm, (opt.max_height_px - top - bottom) / hm));
-  const double W = std::ceil(wm * s + 2 * margin), H = std::ceil(hm * s + top + bottom);
-  const double ox = margin - s * box.u0, oy = top + s * box.v1;
+  // At least as wide as the legend; the plan centred in the width.
+  const double W = std::max(760.0, std::ceil(wm * s + 2 * margin)), H = std::ceil(hm * s + top + bottom);
+  const double ox = (W - wm * s) / 2 - s * box.u0, oy = top + s * box.v1;
   auto px = [&](const Eigen::Vector2d& p) { return Eigen::Vector2d(ox + s * p.x(), oy - s * p.y()); };
 
   std::ostringstream o;
@@ -275,7 +276,11 @@ std::string planSvg(const PipelineResult& r, const std::vector<const pcl::PointC
   for (const DoorResult& d : r.doors) {
     const std::string state = toString(d.state);
     const Eigen::Vector3d normal = horizontal(d.wall_normal, plan.up);
-    const Eigen::Vector2d p = px(plan(d.opening_center - 0.45 * normal));
+    Eigen::Vector2d p = px(plan(d.opening_center - 0.45 * normal));
+    // Kept inside the picture: about 7.5 px a character at 13 px bold.
+    const double half = 3.75 * (std::to_string(d.id).size() + state.size() + 14);
+    p.x() = std::clamp(p.x(), half + 2, std::max(half + 2, W - half - 2));
+    p.y() = std::clamp(p.y(), top + 14, std::max(top + 14, H - bottom));
     o << "<text class=\"label\" data-door=\"" << d.id << "\" x=\"" << num(p.x(), 1) << "\" y=\"" << num(p.y(), 1)
       << "\" font-size=\"13\" text-anchor=\"middle\" fill=\"" << stateColour(state)
       << "\" stroke=\"#ffffff\" stroke-width=\"3\" paint-order=\"stroke\" font-weight=\"bold\">door " << d.id << ": "
@@ -294,7 +299,7 @@ std::string planSvg(const PipelineResult& r, const std::vector<const pcl::PointC
   o << "<text class=\"title\" x=\"" << margin << "\" y=\"24\" font-size=\"15\" fill=\"#000000\">"
     << escape(opt.title.empty() ? "door_state plan" : opt.title) << " &#8212; " << r.walls.size() << " wall(s), "
     << r.doors.size() << " door(s)</text>\n";
-  const double bar_m = niceLength((W - 2 * margin) / 4 / s), bar_px = bar_m * s;
+  const double bar_m = niceLength((W - 2 * margin) / 6 / s), bar_px = bar_m * s;
   const double by = H - 42;
   o << "<g class=\"scale-bar\" data-metres=\"" << num(bar_m, 2) << "\" data-px=\"" << num(bar_px, 2) << "\">"
     << "<line x1=\"" << margin << "\" y1=\"" << by << "\" x2=\"" << num(margin + bar_px, 2) << "\" y2=\"" << by
@@ -317,10 +322,9 @@ std::string planSvg(const PipelineResult& r, const std::vector<const pcl::PointC
     << "\" stroke=\"#555555\" stroke-width=\"4\" stroke-dasharray=\"6,4\"/><text x=\"" << num(lx + 27, 1) << "\" y=\""
     << by + 4 << "\" font-size=\"12\">angle is a lower bound</text></g>\n";
   o << "<text class=\"axes\" x=\"" << margin << "\" y=\"" << H - 14
-    << "\" font-size=\"11\" fill=\"#555555\">view from above (up "
-    << num(plan.up.x(), 2) << " " << num(plan.up.y(), 2) << " " << num(plan.up.z(), 2) << "); right: ("
-    << num(plan.u.x(), 2) << " " << num(plan.u.y(), 2) << " " << num(plan.u.z(), 2) << "), up the page: ("
-    << num(plan.v.x(), 2) << " " << num(plan.v.y(), 2) << " " << num(plan.v.z(), 2)
+    << "\" font-size=\"11\" fill=\"#555555\">view from above; right: (" << num(plan.u.x(), 2) << " "
+    << num(plan.u.y(), 2) << " " << num(plan.u.z(), 2) << "), up the page: (" << num(plan.v.x(), 2) << " "
+    << num(plan.v.y(), 2) << " " << num(plan.v.z(), 2)
     << ") of the input frame; grey: points between floor and ceiling</text>\n";
   o << "</svg>\n";
   return o.str();
