@@ -17,11 +17,14 @@ from leaf_visibility import leaf_share, read_pcd_xyz  # noqa: E402
 
 
 def why_missed(door, share, beyond):
-    where = {"toward_viewer": "towards the scanner", "away_from_viewer": "away from the scanner"}[door["swing"]]
+    how = ("swung away behind its wall" if door["swing"] == "away_from_viewer"
+           else "seen edge-on or hidden by what stands in front")
     if share <= 0.12:
-        return (f"its leaf is out of the scanner's sight ({100 * share:.0f} % of its cells seen; swung {where}, "
-                f"behind its wall, edge-on or hidden), and free space does not bound it at "
-                f"unseen_leaf_min_bound_deg (90) or more: a second station beyond the door would see it")
+        return (f"its leaf is out of the scanner's sight ({100 * share:.0f} % of its cells seen: {how}), and free "
+                f"space does not bound it at unseen_leaf_min_bound_deg (90) or more; a station beyond the door would see it")
+    if share < 0.35:
+        return (f"only {100 * share:.0f} % of its leaf's cells were seen ({how}), below the share a leaf needs "
+                f"(min_leaf_coverage, 35 % where the wall is densely sampled), and free space does not bound it at 90 deg or more")
     return (f"its leaf was seen ({100 * share:.0f} % of its cells, {100 * beyond:.0f} % beyond 10 cm of the hinge) "
             f"but no doorway or leaf fit passed: door_state_cli --verbose prints the decision on each candidate")
 
