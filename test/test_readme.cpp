@@ -265,4 +265,16 @@ TEST(Readme, StaysAManualOfAtMost400LinesWithTheTwoCommandsFirst) {
   static const std::regex link(R"(\]\(((?:doc|config|cfg|launch|msg)/[^)#\s]+)(?:#[^)]*)?\))");
   for (std::sregex_iterator it(text.begin(), text.end(), link), stop; it != stop; ++it)
     EXPECT_TRUE(std::filesystem::exists(kSource + "/" + (*it)[1].str())) << (*it)[1];
+  // And every relative link of doc/*.md.
+  static const std::regex doc_link(R"(\]\(([^)#\s:]+)(?:#[^)]*)?\))");
+  std::size_t docs = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(kSource + "/doc")) {
+    if (entry.path().extension() != ".md") continue;
+    ++docs;
+    const std::string doc = readFile(entry.path().string());
+    for (std::sregex_iterator it(doc.begin(), doc.end(), doc_link), stop; it != stop; ++it)
+      EXPECT_TRUE(std::filesystem::exists(entry.path().parent_path() / (*it)[1].str()))
+          << entry.path().filename() << " links " << (*it)[1];
+  }
+  EXPECT_GE(docs, 4u) << "doc/ holds results, benchmarks, method, development";
 }
