@@ -57,7 +57,7 @@ roslaunch -p "$PORT" door_state_recognition bag_playback.launch bag:="$PREFIX.ba
   > "$OUT/roslaunch.log" 2>&1 &
 LAUNCH_PID=$!
 trap 'kill -INT $LAUNCH_PID 2>/dev/null; sleep 2; kill -9 $LAUNCH_PID 2>/dev/null || true' EXIT
-sleep 2
+for _ in $(seq 1 60); do rosnode list >/dev/null 2>&1 && break; sleep 0.5; done   # the master is up
 /usr/bin/python3 "$REPO/scripts/demo_listener.py" "$PREFIX.json" 2
 echo "   (a door not found here is missed for the reason given above: the nodelet runs the same pipeline)"
 echo "   (nodelet log: $OUT/roslaunch.log)"
