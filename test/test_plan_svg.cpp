@@ -185,8 +185,9 @@ void checkAgainstReport(const std::string& doc, const PipelineResult& result, co
     EXPECT_NEAR(num(*leaf[0], "data-angle-deg"), d.opening_angle_deg, 0.051);
     // The label names id, state and angle.
     EXPECT_NE(label[0]->text.find("door " + id + ": " + toString(d.state)), std::string::npos) << label[0]->text;
-    EXPECT_NE(label[0]->text.find(std::to_string(static_cast<int>(std::lround(d.opening_angle_deg)))), std::string::npos)
-        << label[0]->text;
+    char angle[32];
+    std::snprintf(angle, sizeof angle, "%.1f&#176;", d.opening_angle_deg);
+    EXPECT_NE(label[0]->text.find(angle), std::string::npos) << label[0]->text;
     // The swing arc runs from the leaf closed (along the wall) to the latch:
     // the angle between the two at the hinge is the door's angle.
     ASSERT_EQ(swing.size(), 1u);

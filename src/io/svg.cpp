@@ -284,7 +284,7 @@ std::string planSvg(const PipelineResult& r, const std::vector<const pcl::PointC
     o << "<text class=\"label\" data-door=\"" << d.id << "\" x=\"" << num(p.x(), 1) << "\" y=\"" << num(p.y(), 1)
       << "\" font-size=\"13\" text-anchor=\"middle\" fill=\"" << stateColour(state)
       << "\" stroke=\"#ffffff\" stroke-width=\"3\" paint-order=\"stroke\" font-weight=\"bold\">door " << d.id << ": "
-      << escape(state) << " " << (d.angle_is_lower_bound ? "&#8805;" : "") << num(d.opening_angle_deg, 0)
+      << escape(state) << " " << (d.angle_is_lower_bound ? "&#8805;" : "") << num(d.opening_angle_deg, 1)
       << "&#176;</text>\n";
   }
   for (std::size_t k = 0; k < opt.viewpoints.size(); ++k) {
