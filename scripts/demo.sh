@@ -23,7 +23,7 @@ DOORS=()
 
 echo "== simulating scene '$SCENE' (seed $SEED): one laser scan of 400k rays, 5 mm range noise"
 "$BIN/door_scene_sim" --quiet --scene "$SCENE" --seed "$SEED" "${DOORS[@]}" --points 400000 --noise 0.005 \
-  --formats pcd,ply,json,bag --out "$PREFIX"
+  --formats pcd,ply,json,bag --bag-count 10 --out "$PREFIX"   # 10 clouds at 1 Hz: the listener takes the first 2 it hears
 echo "   wrote $PREFIX.pcd, .ply, .bag and the ground truth $PREFIX.json"
 
 echo "== ground truth (cloud frame, metres, degrees)"

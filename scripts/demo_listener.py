@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Waits for DoorStateArray messages on /doors and prints each door next to
 the simulator's truth (truth JSON given; doors matched by opening centre)."""
-import json, math, sys
+import json, math, sys, threading
 import numpy as np
 import rospy
 from door_state_recognition.msg import DoorStateArray
@@ -35,8 +35,14 @@ def main():
         if len(got) >= want:
             rospy.signal_shutdown("done")
     rospy.Subscriber("/doors", DoorStateArray, cb, queue_size=5)
-    rospy.Timer(rospy.Duration(120), lambda e: rospy.signal_shutdown("timeout"), oneshot=True)
+    # Wall-clock timeout: under use_sim_time (the bag's clock) a rospy.Timer
+    # stops with the bag and would never fire.
+    timer = threading.Timer(120, lambda: rospy.signal_shutdown("timeout: no answer from the nodelet"))
+    timer.daemon = True
+    timer.start()
     rospy.spin()
+    if len(got) < want:
+        print(f"   only {len(got)} of {want} DoorStateArray messages within 120 s: see the nodelet log", file=sys.stderr)
     sys.exit(0 if len(got) >= want else 1)
 
 if __name__ == "__main__":
