@@ -292,6 +292,9 @@ TEST(PlanSvg, AnEmptyResultAndAHostileTitleStillGiveAWellFormedPlan) {
   odd.points.emplace_back(std::nanf(""), 0.f, 0.f);
   for (int i = 0; i < 1000; ++i) odd.points.emplace_back(0.01f * i, 0.f, 1.f);
   odd.points.emplace_back(1e6f, 1e6f, 1.f);
+  io::PlanOptions tiny;
+  tiny.cell = 1e-9;  // a cell far too fine for the extent is widened, not allocated
+  EXPECT_FALSE(byClass(parseXml(io::planSvg(empty, {&odd}, tiny)), "density").empty());
   const auto els2 = parseXml(io::planSvg(empty, {&odd}));
   EXPECT_LE(num(els2.front(), "width"), 1000);
   EXPECT_GT(num(els2.front(), "data-pixels-per-metre"), 50) << "one stray point 1000 km off must not shrink the plan";

@@ -172,7 +172,9 @@ std::string planSvg(const PipelineResult& r, const std::vector<const pcl::PointC
     << num(-s, 4) << ")\">\n";
 
   // Point density: counts per cell, opacity in 8 levels by log count.
-  const double cell = opt.cell > 0 ? opt.cell : std::max(0.04, std::max(wm, hm) / 250.0);
+  // (A cell asked finer than the extent / 2000 is widened: the grid stays small.)
+  const double cell = opt.cell > 0 ? std::max(opt.cell, std::max(wm, hm) / 2000.0)
+                                   : std::max(0.04, std::max(wm, hm) / 250.0);
   const int nx = static_cast<int>(std::ceil(wm / cell)), ny = static_cast<int>(std::ceil(hm / cell));
   if (!pu.empty() && nx > 0 && ny > 0) {
     std::vector<std::uint32_t> count(static_cast<std::size_t>(nx) * ny, 0);

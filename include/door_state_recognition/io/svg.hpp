@@ -27,7 +27,7 @@ namespace io {
 struct PlanOptions {
   std::string title;                          // shown at the top (e.g. the input's name)
   std::vector<Eigen::Vector3d> viewpoints;    // sensor positions to mark (input frame)
-  double cell = 0;                            // density cell in metres; 0: from the extent (>= 0.04)
+  double cell = 0;  // density cell in metres (at least the extent / 2000); 0: the extent / 250, at least 0.04
   int max_width_px = 1000, max_height_px = 800;
 };
 
