@@ -4,6 +4,8 @@
 // coloured by state, a lower bound dashed, well-formed XML.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -74,13 +76,32 @@ std::vector<Element> parseXml(const std::string& doc) {
     Element e;
     std::istringstream is(tag);
     is >> e.name;
-    static const std::regex attr_re("([A-Za-z_:][-A-Za-z0-9_:.]*)=\"([^\"<]*)\"");
-    std::string rest = tag.substr(e.name.size());
-    for (std::sregex_iterator it(rest.begin(), rest.end(), attr_re), stop; it != stop; ++it)
-      e.attr[(*it)[1]] = (*it)[2];
-    // Everything between the name and the end must be attributes.
-    const std::string leftover = std::regex_replace(rest, attr_re, "");
-    EXPECT_TRUE(leftover.find_first_not_of(" \n\t") == std::string::npos) << "<" << e.name << "> holds " << leftover;
+    // Attributes by hand (std::regex recurses per character and overflows the
+    // stack on a long path): name="value", separated by white space.
+    const std::string rest = tag.substr(e.name.size());
+    std::size_t k = 0;
+    while (k < rest.size()) {
+      if (std::isspace(static_cast<unsigned char>(rest[k]))) {
+        ++k;
+        continue;
+      }
+      const std::size_t eq = rest.find('=', k);
+      const bool quoted = eq != std::string::npos && eq + 1 < rest.size() && rest[eq + 1] == '"';
+      const std::size_t close = quoted ? rest.find('"', eq + 2) : std::string::npos;
+      const std::string name = eq == std::string::npos ? rest.substr(k) : rest.substr(k, eq - k);
+      const bool name_ok = !name.empty() && std::all_of(name.begin(), name.end(), [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == ':' || c == '.';
+      });
+      if (!quoted || close == std::string::npos || !name_ok) {
+        ADD_FAILURE() << "<" << e.name << "> has a malformed attribute at: " << rest.substr(k, 40);
+        break;
+      }
+      const std::string value = rest.substr(eq + 2, close - eq - 2);
+      EXPECT_EQ(value.find('<'), std::string::npos) << "'<' in attribute " << name;
+      EXPECT_EQ(e.attr.count(name), 0u) << "attribute " << name << " twice";
+      e.attr[name] = value;
+      k = close + 1;
+    }
     if (e.name == "text") e.text = doc.substr(text_start, doc.find('<', text_start) - text_start);
     out.push_back(e);
     if (!self_closing) open.push_back(e.name);
