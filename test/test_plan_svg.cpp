@@ -2,6 +2,7 @@
 // report it draws and the truth of simulated scenes: an element per wall and
 // per door, every leaf at its hinge and angle in the plan's metre transform,
 // coloured by state, a lower bound dashed, well-formed XML.
+#include <gtest/gtest-spi.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -354,4 +355,13 @@ TEST(PlanSvg, CliWritesThePlanOfItsReportAndRefusesAnUnwritablePathFirst) {
     EXPECT_EQ(byClass(els, "leaf", "data-door", id)[0]->attr.at("data-state"), d["state"].get<std::string>());
   }
   std::filesystem::remove_all(dir);
+}
+
+TEST(PlanSvg, TheXmlCheckOfTheseTestsCatchesBrokenDocuments) {
+  // The checker the tests above rely on fails on what it must catch.
+  EXPECT_NONFATAL_FAILURE(parseXml("<?xml version=\"1.0\"?>\n<svg><g></svg>\n"), "closes");
+  EXPECT_NONFATAL_FAILURE(parseXml("<?xml version=\"1.0\"?>\n<svg><g>\n"), "unclosed");
+  EXPECT_NONFATAL_FAILURE(parseXml("<?xml version=\"1.0\"?>\n<svg a=b></svg>\n"), "malformed attribute");
+  EXPECT_NONFATAL_FAILURE(parseXml("<?xml version=\"1.0\"?>\n<svg><text>a & b</text></svg>\n"), "bare &");
+  EXPECT_NONFATAL_FAILURE(parseXml("<svg></svg>\n"), "declaration");
 }
