@@ -1,19 +1,29 @@
 #!/usr/bin/env bash
-# make demo: simulate a scene with known doors, show its ground truth, and -
-# once the pipeline's command-line tool is built - run it and score it.
+# make demo: simulate a room with a closed, a semi-open and an open door, find
+# them from the file (door_state_cli) and through the nodelet (a rosbag played
+# by bag_playback.launch), print each against the truth with a line saying
+# why for any door missed or reported as a bound, and write a plan (SVG).
+#
+# The scene: a random room of DEMO_SEED with three doors (--doors 3:3). The
+# seed was picked, among the first seeds of that kind, as one where the three
+# doors are in the three states and all three are found from a single scan;
+# on other seeds a door whose leaf is out of the scanner's sight is missed, and
+# the demo says so (DEMO_SEED=N make demo shows another room).
 set -euo pipefail
 REPO="$(cd "$(dirname "$0")/.." && pwd)"
 BUILD="${DSR_BUILD:-$REPO/build}"
 BIN="$BUILD/bin"
 OUT="$BUILD/demo"
 SCENE="${DEMO_SCENE:-random}"
-SEED="${DEMO_SEED:-4}"
+SEED="${DEMO_SEED:-14}"
 mkdir -p "$OUT"
 PREFIX="$OUT/scene"
+DOORS=()
+[ "$SCENE" = random ] && DOORS=(--doors "${DEMO_DOORS:-3:3}")
 
-echo "== simulating scene '$SCENE' (seed $SEED): laser scan of 400k rays, 5 mm range noise"
-"$BIN/door_scene_sim" --scene "$SCENE" --seed "$SEED" --points 400000 --noise 0.005 \
-  --formats pcd,ply,json,bag --out "$PREFIX"
+echo "== simulating scene '$SCENE' (seed $SEED): one laser scan of 400k rays, 5 mm range noise"
+"$BIN/door_scene_sim" --quiet --scene "$SCENE" --seed "$SEED" "${DOORS[@]}" --points 400000 --noise 0.005 \
+  --formats pcd,ply,json,bag --bag-count 10 --out "$PREFIX"   # 10 clouds at 1 Hz: the listener takes the first 2 it hears
 echo "   wrote $PREFIX.pcd, .ply, .bag and the ground truth $PREFIX.json"
 
 echo "== ground truth (cloud frame, metres, degrees)"
@@ -26,33 +36,17 @@ for i, d in enumerate(t["doors"]):
     print(f"   door {i}: {d['state']:9s} {d['opening_angle_deg']:6.1f} deg  width {d['width']:.2f} m  "
           f"hinge {d['hinge_side']:5s} swings {d['swing']:16s} centre ({c[0]:.2f}, {c[1]:.2f}, {c[2]:.2f})")
 for d in t["decoys"]:
-    print(f"   decoy: {d['kind']} {d['height']:.2f} m tall")
+    print(f"   look-alike: {d['kind']} {d['height']:.2f} m tall")
 PY
 
-echo "== running the pipeline: door_state_cli $PREFIX.pcd"
-"$BIN/door_state_cli" --json "$OUT/report.json" --reconstruction "$OUT/reconstruction.ply" "$PREFIX.pcd"
+echo "== the file: door_state_cli --json --svg --reconstruction $PREFIX.pcd"
+"$BIN/door_state_cli" --quiet --json "$OUT/report.json" --svg "$OUT/plan.svg" \
+  --reconstruction "$OUT/reconstruction.ply" "$PREFIX.pcd"
 "$BIN/door_state_eval" "$PREFIX.json" "$OUT/report.json" > "$OUT/score.json"
-echo "== doors found next to the truth (report: $OUT/report.json, walls rebuilt: $OUT/reconstruction.ply)"
-/usr/bin/python3 - "$PREFIX.json" "$OUT/report.json" "$OUT/score.json" <<'PY'
-import json, sys
-t, r, s = (json.load(open(f)) for f in sys.argv[1:4])
-by_truth = {m["truth_index"]: m for m in s["matches"]}
-print(f"   {'truth':28s} {'found':28s} angle error  hinge error")
-for i, d in enumerate(t["doors"]):
-    truth = f"{d['state']} {d['opening_angle_deg']:.1f} deg"
-    m = by_truth.get(i)
-    if m:
-        f = r["doors"][m["report_index"]]
-        found = f"{f['state']} {f['opening_angle_deg']:.1f} deg"
-        print(f"   door {i}: {truth:20s} {found:28s} {m['angle_error_deg']:6.2f} deg  {100*m['hinge_error_m']:6.1f} cm")
-    else:
-        print(f"   door {i}: {truth:20s} {'not found':28s}")
-for j in s["unmatched_report"]:
-    f = r["doors"][j]
-    print(f"   (reported, matches no door: {f['state']} {f['opening_angle_deg']:.1f} deg)")
-print(f"   precision {s['precision']:.2f}, recall {s['recall']:.2f}, state accuracy "
-      f"{s['state_accuracy'] if s['state_accuracy'] is None else round(s['state_accuracy'], 2)}")
-PY
+echo "== doors found next to the truth"
+/usr/bin/python3 "$REPO/scripts/demo_table.py" "$PREFIX.json" "$OUT/report.json" "$OUT/score.json" "$PREFIX.pcd"
+echo "   report: $OUT/report.json; walls rebuilt: $OUT/reconstruction.ply"
+echo "   plan (top view, open it in a browser): $OUT/plan.svg"
 
 echo "== the same scene as a rosbag, played through the nodelet (roslaunch bag_playback.launch rviz:=false)"
 export PATH=/usr/bin:$PATH
@@ -63,6 +57,11 @@ roslaunch -p "$PORT" door_state_recognition bag_playback.launch bag:="$PREFIX.ba
   > "$OUT/roslaunch.log" 2>&1 &
 LAUNCH_PID=$!
 trap 'kill -INT $LAUNCH_PID 2>/dev/null; sleep 2; kill -9 $LAUNCH_PID 2>/dev/null || true' EXIT
-sleep 2
+for _ in $(seq 1 60); do rosnode list >/dev/null 2>&1 && break; sleep 0.5; done   # the master is up
 /usr/bin/python3 "$REPO/scripts/demo_listener.py" "$PREFIX.json" 2
+echo "   (a door not found here is missed for the reason given above: the nodelet runs the same pipeline)"
 echo "   (nodelet log: $OUT/roslaunch.log)"
+# (Integrator: once the robot drive lands, a short drive here: door_scene_sim
+# --drive writes a bag, bag_playback.launch plays it, and the listener prints
+# tracked_doors against the truth.)
+echo "== plan of the scene: $OUT/plan.svg"

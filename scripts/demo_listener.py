@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Waits for DoorStateArray messages on /doors and prints each door next to
 the simulator's truth (truth JSON given; doors matched by opening centre)."""
-import json, math, sys
+import json, math, sys, threading
 import numpy as np
 import rospy
 from door_state_recognition.msg import DoorStateArray
@@ -29,14 +29,20 @@ def main():
                        default=None)
             found = "not found"
             if best and math.hypot(best.opening_center.x - centre[0], best.opening_center.y - centre[1]) < 0.5:
-                found = (f"id {best.id}: {STATES[best.state]} {math.degrees(best.opening_angle):.1f} deg "
+                found = (f"id {best.id}: {STATES.get(best.state, best.state)} {'>= ' if best.angle_is_lower_bound else ''}{math.degrees(best.opening_angle):.1f} deg "
                          f"(confidence {best.confidence:.2f})")
             print(f"   truth {d['state']:9s} {d['opening_angle_deg']:6.1f} deg   ->   {found}")
         if len(got) >= want:
             rospy.signal_shutdown("done")
     rospy.Subscriber("/doors", DoorStateArray, cb, queue_size=5)
-    rospy.Timer(rospy.Duration(120), lambda e: rospy.signal_shutdown("timeout"), oneshot=True)
+    # Wall-clock timeout: under use_sim_time (the bag's clock) a rospy.Timer
+    # stops with the bag and would never fire.
+    timer = threading.Timer(120, lambda: rospy.signal_shutdown("timeout: no answer from the nodelet"))
+    timer.daemon = True
+    timer.start()
     rospy.spin()
+    if len(got) < want:
+        print(f"   only {len(got)} of {want} DoorStateArray messages within 120 s: see the nodelet log", file=sys.stderr)
     sys.exit(0 if len(got) >= want else 1)
 
 if __name__ == "__main__":

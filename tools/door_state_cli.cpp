@@ -18,6 +18,7 @@
 #include "cli_args.hpp"
 #include "door_state_recognition/io/cloud_reader.hpp"
 #include "door_state_recognition/io/report.hpp"
+#include "door_state_recognition/io/svg.hpp"
 #include "door_state_recognition/pipeline/pipeline.hpp"
 #include "door_state_recognition/pipeline/sight.hpp"
 #include "door_state_recognition/util/keep_freed_memory.hpp"
@@ -26,7 +27,8 @@
 namespace {
 
 const char* kUsage = R"(usage: door_state_cli [--config FILE.yaml] [--up +z|-z|+y|-y|+x|-x|auto]
-                      [--viewpoint auto|header|none|X,Y,Z] [--json OUT.json] [--reconstruction OUT.ply] [--quiet] [--verbose]
+                      [--viewpoint auto|header|none|X,Y,Z] [--json OUT.json]
+                      [--reconstruction OUT.ply] [--svg OUT.svg] [--quiet] [--verbose]
                       INPUT [INPUT...]
 
 Finds the walls and doors in a point cloud and tells every door's state
@@ -63,11 +65,14 @@ the inputs one cloud without a viewpoint.
   --json OUT.json          write the report there instead of stdout
   --reconstruction OUT.ply walls rebuilt with their doorways and leaves (label 1 wall, 2 leaf);
                            with no wall found, a valid PLY of 0 points
+  --svg OUT.svg            a plan (top view, metres, scale bar): points as grey density,
+                           walls, doorways, each leaf at its angle with its swing arc,
+                           coloured by state (a lower bound dashed), labelled
   --quiet                  no progress or timings on stderr
   --verbose                also every wall and doorway candidate with the decision on it
   -h, --help               this text
 
-Both outputs are opened before any INPUT is read: one that cannot be written
+Every output is opened before any INPUT is read: one that cannot be written
 is refused at once. INPUT must be a file ('-', stdin, is refused).
 
 exit status: 0 report written (zero doors included; the reconstruction, if
@@ -129,7 +134,7 @@ void writeReconstruction(const std::string& path, const pcl::PointCloud<pcl::Poi
 int main(int argc, char** argv) {
   dsr::util::shortOmpSpin(argv);  // before anything else: the program may be run again
   dsr::util::keepFreedMemory();   // the stations of a survey, one after another
-  std::string config, up, json_out, recon_out, viewpoint_arg = "auto";
+  std::string config, up, json_out, recon_out, svg_out, viewpoint_arg = "auto";
   std::optional<Eigen::Vector3d> viewpoint_xyz;
   std::vector<std::string> inputs;
   bool quiet = false, verbose = false;
@@ -159,6 +164,7 @@ int main(int argc, char** argv) {
       }
       else if (a == "--json") json_out = value();
       else if (a == "--reconstruction") recon_out = value();
+      else if (a == "--svg") svg_out = value();
       else if (a == "--quiet") quiet = true;
       else if (a == "--verbose") verbose = true;
       else if (a == "-") throw UsageError("INPUT '-': reading a cloud from stdin is not supported; give a file");
@@ -180,7 +186,7 @@ int main(int argc, char** argv) {
     // The configured limit applies to reading too: a header asking more is refused unread.
     dsr::io::setMaxPoints(static_cast<std::size_t>(params.max_points));
     // Both outputs opened before anything is read: a bad path costs no pipeline run.
-    Output json_file("--json", json_out), recon_file("--reconstruction", recon_out);
+    Output json_file("--json", json_out), recon_file("--reconstruction", recon_out), svg_file("--svg", svg_out);
     const auto t0 = std::chrono::steady_clock::now();
     // Every input read before anything is said: a bad one is one line on stderr.
     std::vector<pcl::PointCloud<pcl::PointXYZ>> clouds;
@@ -250,6 +256,14 @@ int main(int argc, char** argv) {
         std::cerr << "door_state_cli: no wall to reconstruct, " << recon_out << " holds 0 points\n";
       writeReconstruction(recon_out, result.reconstruction);
       recon_file.done = true;
+    }
+    if (!svg_out.empty()) {  // the plan, before the report too
+      dsr::io::PlanOptions plan;
+      plan.title = input;
+      std::vector<const pcl::PointCloud<pcl::PointXYZ>*> plan_clouds;
+      for (const dsr::Station& st : stations) plan_clouds.push_back(st.cloud), plan.viewpoints.push_back(st.viewpoint);
+      dsr::io::writePlanSvg(svg_out, result, plan_clouds, plan);
+      svg_file.done = true;
     }
     if (json_out.empty()) {
       std::cout << report.dump(2) << "\n";
