@@ -573,6 +573,7 @@ TEST(Clutter, NeverInADoorwayOrALeafsSwingAndAgainstTheWalls) {
     }
   }
   // The generator does put pieces right beside doors, and of every kind.
+  SCOPED_TRACE("seeds 300-359");
   EXPECT_GT(beside_casing, 30);
   EXPECT_GT(chairs, 20);
   EXPECT_GT(shelving, 40);
