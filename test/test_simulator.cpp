@@ -537,6 +537,8 @@ TEST(Clutter, NeverInADoorwayOrALeafsSwingAndAgainstTheWalls) {
       const double t = d.wall < 4 ? r.wall_thickness : r.partition->thickness;
       for (const Box& b : s.boxes) {
         if (b.surface != Surface::Furniture) continue;
+        const Eigen::Isometry3d to_box = b.pose.inverse();
+        auto inside = [&](const Eigen::Vector3d& p) { return ((to_box * p).cwiseAbs() - b.half).maxCoeff() <= 0.0; };
         // A leaf swinging into the room sweeps a disc of its width about the hinge.
         if (d.swing_into_room) {
           EXPECT_GE(footprintDistance(b, d.hinge), d.width - 0.01) << "door " << i;
@@ -546,9 +548,9 @@ TEST(Clutter, NeverInADoorwayOrALeafsSwingAndAgainstTheWalls) {
           for (double n = -t; n <= 0.5; n += 0.05)
             for (double z = 0.05; z < d.height; z += 0.25) {
               const Eigen::Vector3d p = d.opening_center + w.axis * (u * d.width) + w.normal * (n + t / 2) + Eigen::Vector3d::UnitZ() * z;
-              EXPECT_FALSE(b.contains(p)) << "door " << i << " at " << p.transpose();
+              EXPECT_FALSE(inside(p)) << "door " << i << " at " << p.transpose();
             }
-        for (const auto& c : boxCorners(leafOf(s, static_cast<int>(i)))) EXPECT_FALSE(b.contains(c)) << "door " << i;
+        for (const auto& c : boxCorners(leafOf(s, static_cast<int>(i)))) EXPECT_FALSE(inside(c)) << "door " << i;
       }
     }
     // Pieces against a wall: their back 0.5-5 cm off its face, within its length.
@@ -571,6 +573,7 @@ TEST(Clutter, NeverInADoorwayOrALeafsSwingAndAgainstTheWalls) {
     }
   }
   // The generator does put pieces right beside doors, and of every kind.
+  SCOPED_TRACE("seeds 300-359");
   EXPECT_GT(beside_casing, 30);
   EXPECT_GT(chairs, 20);
   EXPECT_GT(shelving, 40);
@@ -631,7 +634,11 @@ TEST(Clutter, CorridorsAreLongAndNarrowWithDoorsAlongTheirSides) {
     EXPECT_LE(r.depth, 2.2);
     EXPECT_GE(r.doors.size(), 2u);
     for (const DoorSpec& d : r.doors) EXPECT_TRUE(d.wall == 0 || d.wall == 2);
-    EXPECT_NO_THROW(scanTls(buildScene(r), TlsOptions()));
+    TlsOptions t;  // the scanner finds room to stand in every corridor
+    t.points = 5000;
+    t.viewpoints = 3;
+    t.seed = seed;
+    EXPECT_NO_THROW(scanTls(buildScene(r), t));
   }
 }
 

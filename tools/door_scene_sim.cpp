@@ -226,6 +226,7 @@ int main(int argc, char** argv) {
                 << spec.height << " m), " << scene.doors.size() << " door(s), " << scene.decoys.size()
                 << " furniture piece(s); " << sensor << " cloud of " << cloud.cloud.size() << " points in frame "
                 << cloud.frame_id << " simulated in " << static_cast<int>(ms) << " ms\n";
+      if (mesh_vertices > 0) std::cerr << "  mesh-like: median vertex spacing " << sim::medianSpacing(cloud.cloud) << " m\n";
       for (std::size_t i = 0; i < scene.doors.size(); ++i) {
         const auto& d = scene.doors[i];
         std::cerr << "  door " << i << ": " << d.state() << " at " << d.angle_deg << " deg, width " << d.width
