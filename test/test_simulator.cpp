@@ -457,20 +457,23 @@ TEST(Lidar, NoReturnIsNanOrZeroExactlyWhereNothingIsInRange) {
   LidarOptions o = exactLidar(16, seed);
   o.azimuth_steps = 360;
   o.max_range = 2.5;  // the far walls of a 5 x 4 room are out of range
-  o.min_range = 0.3;
-  o.mast_height = 0.6;
+  o.min_range = 1.0;  // and the near wall, 0.6 m away, too close
+  const WallTruth& w = s.walls[0];
+  o.sensor_to_world = Eigen::Isometry3d(Eigen::Translation3d(w.origin + w.normal * 0.6 + Eigen::Vector3d(0, 0, 0.6)) *
+                                        Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()));
   const SimulatedCloud c = scanLidar(s, o);
   o.zeros_for_no_return = true;
   const SimulatedCloud z = scanLidar(s, o);
   EXPECT_TRUE(c.sensor_to_world.isApprox(z.sensor_to_world));
   EXPECT_NEAR(c.sensor_to_world.translation().z(), 0.6, 1e-12);
-  int none = 0, some = 0;
+  int none = 0, some = 0, near = 0;
   for (int r = 0; r < 16; ++r)
     for (int col = 0; col < 360; ++col) {
       const double el = lidarBeamElevation(o, r), az = kPiTest - 2 * kPiTest * (col + 0.5) / 360;
       const Eigen::Vector3d d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
       const RayHit h = castRay(s, c.sensor_to_world.translation(), c.sensor_to_world.linear() * d, 1000);
       const bool expect = h.hit && h.t >= o.min_range && h.t <= o.max_range;
+      near += h.hit && h.t < o.min_range;
       const auto& q = c.cloud.at(col, r);
       const auto& qz = z.cloud.at(col, r);
       EXPECT_EQ(std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z), expect) << "row " << r << " col " << col;
@@ -486,6 +489,7 @@ TEST(Lidar, NoReturnIsNanOrZeroExactlyWhereNothingIsInRange) {
     }
   EXPECT_GT(none, 500);
   EXPECT_GT(some, 500);
+  EXPECT_GT(near, 100);
 }
 
 TEST(Lidar, SameSeedSameSweepDifferentSeedDifferentSweepAndBadOptionsRefused) {
