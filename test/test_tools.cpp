@@ -431,9 +431,13 @@ TEST(Tools, SimulatorDriveWritesABagOfCloudsTfAndClock) {
   EXPECT_EQ(truth["doors"][0]["state"], "open");
   EXPECT_EQ(truth["drive"]["path"].size(), 16u);
   EXPECT_EQ(run("door_scene_sim --drive --sensor lidar16 --seed 1004 --drive-seconds 3 --out " + prefix).code, 2);  // too short for its turns
+  // Deterministic for a seed: the same drive again, truth alone.
+  ASSERT_EQ(run("door_scene_sim --drive --sensor lidar16 --seed 1004 --drive-seconds 8 --rate 2 "
+                "--toggle-door 0:90@1.5 --mount-height 0.7 --quiet --formats json --out " + prefix + "2").code, 0);
+  EXPECT_EQ(slurp(prefix + ".json"), slurp(prefix + "2.json"));
   // Bad drive arguments: exit 2.
   EXPECT_EQ(run("door_scene_sim --drive --sensor tls --out " + prefix).code, 2);
-  EXPECT_EQ(run("door_scene_sim --drive --formats pcd --out " + prefix).code, 2);
+  EXPECT_EQ(run("door_scene_sim --drive --formats ply --out " + prefix).code, 2);
   EXPECT_EQ(run("door_scene_sim --drive --toggle-door 0:90 --out " + prefix).code, 2);
   EXPECT_EQ(run("door_scene_sim --drive --toggle-door 9:90@1 --seed 1004 --out " + prefix).code, 2);
   EXPECT_EQ(run("door_scene_sim --drive --rate 0 --out " + prefix).code, 2);

@@ -62,7 +62,7 @@ void writeBag(const std::string& path, const sim::SimulatedCloud& sim, const Bag
 }
 
 void writeDriveBag(const std::string& path, const sim::DrivePlan& plan, const BagOptions& o,
-                   const std::function<void(std::size_t)>& progress) {
+                   const std::function<void(const sim::DriveFrame&)>& each) {
   try {
     rosbag::Bag bag(path, rosbag::bagmode::Write);
     const ros::Time t0(o.start_time);
@@ -90,7 +90,7 @@ void writeDriveBag(const std::string& path, const sim::DrivePlan& plan, const Ba
       msg.header.stamp = stamp;
       msg.header.seq = static_cast<std::uint32_t>(f.index);
       bag.write("/points", stamp + ros::Duration(0.001), msg);
-      if (progress) progress(f.index + 1);
+      if (each) each(f);
     });
     clockUpTo(plan.options.seconds + 1e-6);
     bag.close();

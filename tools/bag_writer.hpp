@@ -27,10 +27,10 @@ void writeBag(const std::string& path, const sim::SimulatedCloud& cloud, const B
 // /tf (map -> base_link at each cloud's stamp), /points (the cloud, in the
 // sensor frame, stamped at its pose's time, recorded 1 ms later), and once,
 // latched, /tf_static base_link -> sensor frame. fixed_frame names map.
-// `progress` (may be empty) is called after each frame. Throws
+// `each` (may be empty) is given every frame after it is written. Throws
 // std::runtime_error when the bag cannot be written.
 void writeDriveBag(const std::string& path, const sim::DrivePlan& plan, const BagOptions& options,
-                   const std::function<void(std::size_t done)>& progress = {});
+                   const std::function<void(const sim::DriveFrame&)>& each = {});
 
 }  // namespace tools
 }  // namespace dsr

@@ -5,6 +5,7 @@
 #include <pcl/io/ply_io.h>
 
 #include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <fstream>
 #include <iostream>
@@ -64,7 +65,7 @@ options:
   --fixed-frame NAME     parent frame of the tf in the bag (default map)
 
 drive (--drive; --sensor lidar16|lidar32|lidar64|lidar128|rgbd, default lidar64;
---formats bag,json only, default both):
+--formats bag,json,pcd, default bag,json):
   --drive                a robot drives through the room past every door (1-3 m
                          from it) and, when one is open (>= 75 deg) and passable,
                          ends 1.8 m beyond it in the room behind. PREFIX.bag holds
@@ -73,7 +74,9 @@ drive (--drive; --sensor lidar16|lidar32|lidar64|lidar128|rgbd, default lidar64;
                          each cloud's stamp), /tf_static (base_link -> sensor frame,
                          latched), /clock (every 10 ms; play without --clock);
                          stamps from 1000 s. PREFIX.json: the truth in map, doors
-                         in their final state, changes, path (see sim/drive.hpp)
+                         in their final state, changes, path (see sim/drive.hpp);
+                         pcd: every cloud as PREFIX.frameNNNNN.pcd (sensor frame)
+                         with its truth in that frame in PREFIX.frameNNNNN.json
   --drive-seconds S      duration (default: the path at 0.5 m/s, turns at 60 deg/s)
   --rate HZ              clouds per second (default 10 LiDAR, 15 RGB-D)
   --toggle-door K:ANGLE@T  door K is at ANGLE deg from T s after the start on
@@ -225,7 +228,7 @@ int main(int argc, char** argv) {
       if (f == "pcd" || f == "ply" || f == "json" || f == "bag") fmt.insert(f);
       else throw UsageError("--formats: unknown format '" + f + "'");
     if (fmt.empty()) throw UsageError("--formats is empty");
-    if (drive && (fmt.count("pcd") || fmt.count("ply"))) throw UsageError("--drive writes bag and json only");
+    if (drive && fmt.count("ply")) throw UsageError("--drive writes bag, json and pcd only");
 
     const auto t_start = std::chrono::steady_clock::now();
     sim::RoomSpec spec = scene_name == "random" ? sim::randomRoom(seed, random_options) : sim::paperRoom(scene_name);
@@ -265,7 +268,23 @@ int main(int argc, char** argv) {
         js << sim::driveTruthJson(plan, bag.start_time).dump(1) << "\n";
         if (!js) throw std::runtime_error("cannot write " + out + ".json");
       }
-      if (fmt.count("bag")) tools::writeDriveBag(out + ".bag", plan, bag);
+      // pcd: every frame's cloud (sensor frame) and its truth in that frame, for per-cloud evaluation.
+      auto perFrame = [&](const sim::DriveFrame& f) {
+        if (!fmt.count("pcd")) return;
+        char name[32];
+        std::snprintf(name, sizeof name, ".frame%05zu", f.index);
+        const std::string p = out + name;
+        if (pcl::io::savePCDFileBinary(p + ".pcd", f.cloud.cloud) != 0) throw std::runtime_error("cannot write " + p + ".pcd");
+        std::ofstream js(p + ".json");
+        nlohmann::json t = sim::groundTruthJson(plan.scenes[f.scene_index], f.cloud);
+        for (std::size_t k = 0; k < t["doors"].size(); ++k)
+          t["doors"][k]["in_view"] = sim::sensorSeesDoor(plan.scenes[f.scene_index], f.cloud, static_cast<int>(k));
+        t["stamp"] = bag.start_time + f.t;
+        js << t.dump(1) << "\n";
+        if (!js) throw std::runtime_error("cannot write " + p + ".json");
+      };
+      if (fmt.count("bag")) tools::writeDriveBag(out + ".bag", plan, bag, perFrame);
+      else if (fmt.count("pcd")) sim::simulateDrive(plan, perFrame);
       const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_start).count();
       if (!quiet) {
         std::cerr << "door_scene_sim: scene " << spec.name << " (" << spec.width << " x " << spec.depth << " x "
