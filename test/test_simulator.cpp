@@ -737,3 +737,43 @@ TEST(Drive, RefusesAbsurdOptions) {
   refused([](DriveOptions& o) { o.mount_height = 2.0; });
   refused([](DriveOptions& o) { o.door_distance = 5; });
 }
+
+TEST(Lidar, AHeadMovingDuringItsSweepCastsEachColumnFromWhereItWas) {
+  const std::uint64_t seed = 21;
+  SCOPED_TRACE(seedTrace(seed));
+  const Scene s = buildScene(oneDoorRoom(30, true, true, 0));
+  LidarOptions o = exactLidar(16, seed);
+  o.azimuth_steps = 720;
+  const Eigen::Isometry3d end = s.room_to_world * Eigen::Translation3d(-0.5, 0.3, 0.8) * Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ());
+  o.sensor_to_world = end;
+  const SimulatedCloud still = scanLidar(s, o);
+  o.sweep_start_to_world = end;  // no motion: the same sweep
+  const SimulatedCloud same = scanLidar(s, o);
+  for (std::size_t i = 0; i < still.cloud.size(); ++i)
+    ASSERT_TRUE((std::isnan(still.cloud[i].x) && std::isnan(same.cloud[i].x)) || still.cloud[i].x == same.cloud[i].x) << i;
+  // 0.3 m back and 20 deg turned at the start (a robot at 3 m/s turning at 200 deg/s: exaggerated).
+  const Eigen::Isometry3d start = end * Eigen::Translation3d(-0.3, 0, 0) * Eigen::AngleAxisd(-0.35, Eigen::Vector3d::UnitZ());
+  o.sweep_start_to_world = start;
+  const SimulatedCloud moving = scanLidar(s, o);
+  EXPECT_TRUE(moving.sensor_to_world.isApprox(end));
+  const Eigen::Isometry3d rel = end.inverse() * start;
+  const Eigen::Quaterniond q0(rel.linear());
+  int on_column_pose = 0, on_end_pose = 0, finite = 0;
+  for (int r = 0; r < 16; ++r)
+    for (int c = 0; c < 720; c += 3) {
+      const auto& q = moving.cloud.at(c, r);
+      if (!std::isfinite(q.x)) continue;
+      ++finite;
+      const double f = (c + 0.5) / 720;
+      Eigen::Isometry3d col = Eigen::Isometry3d::Identity();
+      col.linear() = q0.slerp(f, Eigen::Quaterniond::Identity()).toRotationMatrix();
+      col.translation() = (1 - f) * rel.translation();
+      const Eigen::Vector3d p(q.x, q.y, q.z);
+      // Each point is its beam's range and direction in the head as it was.
+      EXPECT_NEAR(std::atan2(p.z(), p.head<2>().norm()), lidarBeamElevation(o, r), 2e-5);
+      on_column_pose += onSomeSurface(s, end * col * p, 2e-3);
+      on_end_pose += onSomeSurface(s, end * p, 2e-3);
+    }
+  EXPECT_EQ(on_column_pose, finite);       // where the head was, every return lies on a surface
+  EXPECT_LT(on_end_pose, finite * 3 / 4);  // taken at the stamp's pose, the sweep is smeared
+}

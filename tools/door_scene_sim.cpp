@@ -83,6 +83,8 @@ drive (--drive; --sensor lidar16|lidar32|lidar64|lidar128|rgbd, default lidar64;
                          (repeatable)
   --door-distance M      pass the doors this far from their wall, 1-3 m (default 1.4)
   --no-through-door      stay in the room
+  --lidar-motion         LiDAR: the robot moves during each sweep (1 / rate long,
+                         ending at the cloud's stamp); clouds not deskewed
   --camera-pitch DEG     RGB-D pitch, -20..10, negative down (default: drawn)
   --rgbd-size WxH        RGB-D image, 320x240 (default for a drive) or 640x480
   --quiet                no summary on stderr
@@ -196,6 +198,7 @@ int main(int argc, char** argv) {
         drive_options.door_distance = toDouble(a, value());
         if (drive_options.door_distance < 1 || drive_options.door_distance > 3) throw UsageError("--door-distance must lie in [1, 3] m");
       } else if (a == "--no-through-door") drive_options.through_door = false;
+      else if (a == "--lidar-motion") drive_options.lidar_motion = true;
       else if (a == "--camera-pitch") {
         drive_options.camera_pitch_deg = toDouble(a, value());
         if (*drive_options.camera_pitch_deg < -20 || *drive_options.camera_pitch_deg > 10) throw UsageError("--camera-pitch must lie in [-20, 10] deg");

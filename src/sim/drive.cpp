@@ -425,6 +425,7 @@ DriveFrame simulateFrame(const DrivePlan& plan, std::size_t index) {
   if (plan.options.lidar) {
     LidarOptions o = *plan.options.lidar;
     o.sensor_to_world = sensor_to_map;
+    if (plan.options.lidar_motion) o.sweep_start_to_world = plan.baseToMap(f.t - 1.0 / plan.options.rate_hz) * plan.sensor_to_base;
     o.seed = seed;
     f.cloud = scanLidar(scene, o);
   } else {
@@ -555,6 +556,7 @@ nlohmann::json driveTruthJson(const DrivePlan& plan, double start_stamp) {
                 {"sensor_to_base", {{"translation", vec(plan.sensor_to_base.translation())},
                                     {"rotation_xyzw", {q.x(), q.y(), q.z(), q.w()}}}},
                 {"through_door", plan.through_door},
+                {"lidar_motion", o.lidar && o.lidar_motion},
                 {"door_waypoints", waypoints},
                 {"changes", changes},
                 {"path", path}};

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <vector>
 
 #include "ray_random.hpp"
 
@@ -89,6 +90,8 @@ SimulatedCloud scanLidar(const Scene& scene, const LidarOptions& o) {
   requireOption(o.max_incidence_deg > 0 && o.max_incidence_deg <= 90, "max incidence must lie in (0, 90] deg");
   requireOption(o.mast_height < 0 || (o.mast_height >= 0.4 && o.mast_height <= 1.2), "mast height must lie in [0.4, 1.2] m");
   requireOption(!o.sensor_to_world || o.sensor_to_world->matrix().allFinite(), "sensor pose must be finite");
+  requireOption(!o.sweep_start_to_world || (o.sensor_to_world && o.sweep_start_to_world->matrix().allFinite()),
+                "a sweep's start pose needs a finite pose and sensor_to_world");
 
   SimulatedCloud out;
   out.sensor = "lidar" + std::to_string(o.beams);
@@ -108,6 +111,17 @@ SimulatedCloud scanLidar(const Scene& scene, const LidarOptions& o) {
   const Eigen::Vector3d origin = out.sensor_to_world.translation();
   const Eigen::Matrix3d R = out.sensor_to_world.linear();
   out.viewpoints_world.push_back(origin);
+  // Pose of each column's rays relative to the cloud frame (identity: no motion).
+  std::vector<Eigen::Isometry3d> column(o.azimuth_steps, Eigen::Isometry3d::Identity());
+  if (o.sweep_start_to_world) {
+    const Eigen::Isometry3d start = out.sensor_to_world.inverse() * *o.sweep_start_to_world;  // in the end frame
+    const Eigen::Quaterniond q0(start.linear()), q1 = Eigen::Quaterniond::Identity();
+    for (int c = 0; c < o.azimuth_steps; ++c) {
+      const double f = (c + 0.5) / o.azimuth_steps;
+      column[c].linear() = q0.slerp(f, q1).toRotationMatrix();
+      column[c].translation() = (1 - f) * start.translation();
+    }
+  }
 
   const int W = o.azimuth_steps, H = o.beams;
   out.cloud.width = W;
@@ -126,12 +140,14 @@ SimulatedCloud scanLidar(const Scene& scene, const LidarOptions& o) {
       pcl::PointXYZL& q = out.cloud.points[idx];
       q.x = q.y = q.z = none;
       q.label = 0;
-      const Eigen::Vector3d dir = R * d_s;
-      const RayHit hit = castRay(scene, origin, dir, o.max_range);
+      const Eigen::Vector3d d_c = column[c].linear() * d_s;  // the ray in the cloud frame
+      const Eigen::Vector3d dir = R * d_c;
+      const RayHit hit = castRay(scene, origin + R * column[c].translation(), dir, o.max_range);
       if (!hit.hit || hit.t < o.min_range || std::abs(hit.normal.dot(dir)) < cos_max) continue;
       RayRandom rnd(o.seed, 11, idx);
       if (o.dropout > 0 && rnd.uniform() < o.dropout) continue;
       const double range = hit.t + (o.range_sigma > 0 ? o.range_sigma * rnd.gaussian() : 0.0);
+      // As the head measured it: range along its beam, whatever it moved since.
       q.x = static_cast<float>(range * d_s.x());
       q.y = static_cast<float>(range * d_s.y());
       q.z = static_cast<float>(range * d_s.z());

@@ -51,6 +51,10 @@ struct DriveOptions {
   std::optional<LidarOptions> lidar;
   std::optional<RgbdOptions> rgbd;
   std::vector<DoorChange> changes;
+  // LiDAR: each sweep lasts 1 / rate_hz and ends at its cloud's stamp; the
+  // robot moves during it and the cloud is not deskewed (each column cast
+  // from where the head was when it fired, all in the frame at the stamp).
+  bool lidar_motion = false;
   std::uint64_t seed = 1;
 };
 

@@ -37,6 +37,13 @@ struct LidarOptions {
   // Pose of the sensor frame in the world (e.g. on a robot); unset: a free
   // position in the room drawn by the seed, level, yawed arbitrarily.
   std::optional<Eigen::Isometry3d> sensor_to_world;
+  // A head moving during its sweep (a driving robot, clouds not deskewed):
+  // the pose where the sweep began; column c is cast from the pose
+  // interpolated at (c + 0.5) / width between it and sensor_to_world (the
+  // sweep's end: the cloud's frame and stamp; translation linear, rotation
+  // slerp) and written as that head measured it (range along its beam), as
+  // a driver that does not deskew delivers it. Unset: the head stands still.
+  std::optional<Eigen::Isometry3d> sweep_start_to_world;
   std::uint64_t seed = 1;
 
   // 16: +-15 deg, 1800 columns (VLP-16 at 10 Hz), 2 cm noise; 32: -25..+15 deg,
