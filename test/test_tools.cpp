@@ -442,6 +442,8 @@ TEST(Tools, SimulatorDriveWritesABagOfCloudsTfAndClock) {
   EXPECT_EQ(run("door_scene_sim --drive --toggle-door 9:90@1 --seed 1004 --out " + prefix).code, 2);
   EXPECT_EQ(run("door_scene_sim --drive --rate 0 --out " + prefix).code, 2);
   EXPECT_EQ(run("door_scene_sim --sensor lidar24 --out " + prefix).code, 2);
+  EXPECT_EQ(run("door_scene_sim --sensor lidar16 --toggle-door 0:90@1 --out " + prefix).code, 2);  // not a drive
+  EXPECT_EQ(run("door_scene_sim --sensor tls --mount-height 0.8 --out " + prefix).code, 2);
   fs::remove_all(dir);
 }
 

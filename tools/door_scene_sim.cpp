@@ -123,10 +123,14 @@ int main(int argc, char** argv) {
   std::optional<double> mount_height, lidar_noise, lidar_dropout;
   sim::DriveOptions drive_options;
   std::string rgbd_size;
+  std::string drive_flag;  // a drive-only flag given
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
       auto value = [&] { return dsr::tools::nextValue(argc, argv, i); };
+      if (a == "--drive-seconds" || a == "--rate" || a == "--toggle-door" || a == "--door-distance" ||
+          a == "--no-through-door" || a == "--camera-pitch" || a == "--rgbd-size" || a == "--lidar-motion")
+        drive_flag = a;
       if (a == "-h" || a == "--help") {
         std::cout << kUsage;
         return 0;
@@ -214,6 +218,7 @@ int main(int argc, char** argv) {
     if (sensor != "tls" && sensor != "rgbd" && beams == 0)
       throw UsageError("--sensor must be tls, rgbd, lidar16, lidar32, lidar64 or lidar128");
     if (drive && sensor == "tls") throw UsageError("--drive needs --sensor lidar16|lidar32|lidar64|lidar128|rgbd");
+    if (!drive && !drive_flag.empty()) throw UsageError(drive_flag + " is for --drive");
     if (drive && !formats_given) formats = "bag,json";
     if (mount_height) {
       const bool camera = drive && sensor == "rgbd";
