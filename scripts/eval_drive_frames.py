@@ -8,7 +8,8 @@ range, a camera in its image, with a clear sight line). Prints the merged
 figures as JSON.
 
   scripts/eval_drive_frames.py [--sensor lidar16|lidar32|lidar64|lidar128|rgbd]
-                               [--scenes N] [--first-seed S] [--every K] [--jobs J] [--out DIR]
+                               [--scenes N] [--first-seed S] [--every K] [--lidar-motion]
+                               [--jobs J] [--out DIR]
 """
 import argparse, glob, json, os, subprocess, tempfile
 from concurrent.futures import ThreadPoolExecutor
@@ -24,6 +25,7 @@ def main():
     ap.add_argument("--scenes", type=int, default=5)
     ap.add_argument("--first-seed", type=int, default=1000)
     ap.add_argument("--every", type=int, default=10, help="run the pipeline on every K-th cloud")
+    ap.add_argument("--lidar-motion", action="store_true", help="door_scene_sim --lidar-motion (sweeps not deskewed)")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--out", default=None)
     args = ap.parse_args()
@@ -34,7 +36,8 @@ def main():
     for seed in range(args.first_seed, args.first_seed + args.scenes):
         prefix = out / f"{args.sensor}_{seed}"
         subprocess.run([str(BIN / "door_scene_sim"), "--quiet", "--drive", "--sensor", args.sensor, "--seed", str(seed),
-                        "--formats", "json,pcd", "--out", str(prefix)], check=True)
+                        "--formats", "json,pcd", "--out", str(prefix)] + (["--lidar-motion"] if args.lidar_motion else []),
+                       check=True)
         frames = sorted(glob.glob(f"{prefix}.frame*.pcd"))
         for k, pcd in enumerate(frames):
             if k % args.every == 0:
@@ -54,7 +57,8 @@ def main():
                                   capture_output=True, text=True).stdout)
     summary = {k: m.get(k) for k in ["scenes", "true_doors", "reported_doors", "matched", "precision", "recall",
                                      "state_accuracy", "angle_mae_deg", "angle_lower_bounds", "hinge_error_median_m"]}
-    summary.update(sensor=args.sensor, first_seed=args.first_seed, drives=args.scenes, every=args.every)
+    summary.update(sensor=args.sensor, first_seed=args.first_seed, drives=args.scenes, every=args.every,
+                   lidar_motion=args.lidar_motion)
     print(json.dumps(summary, indent=1))
 
 
