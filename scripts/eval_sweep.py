@@ -3,7 +3,7 @@
 each, scores every report against its truth with door_state_eval, and prints
 the merged figures as JSON (plus one line per scene with --verbose).
 
-  scripts/eval_sweep.py [--sensor tls|rgbd] [--scenes N] [--first-seed S]
+  scripts/eval_sweep.py [--sensor tls|rgbd|lidar16|lidar32|lidar64|lidar128] [--scenes N] [--first-seed S]
                         [--points N] [--viewpoints K] [--beyond-doors] [--no-handles] [--up AXIS] [--config FILE] [--jobs J]
                         [--merge] [--mesh-like N] [--clutter] [--partition] [--corridor]
                         [--verbose] [--out DIR]
@@ -47,7 +47,7 @@ def one(args, seed, out):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--sensor", default="tls", choices=["tls", "rgbd"])
+    ap.add_argument("--sensor", default="tls", choices=["tls", "rgbd", "lidar16", "lidar32", "lidar64", "lidar128"])
     ap.add_argument("--scenes", type=int, default=30)
     ap.add_argument("--first-seed", type=int, default=1000)
     ap.add_argument("--points", type=int, default=400000)

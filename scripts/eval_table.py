@@ -12,7 +12,8 @@ and NAME.log (simulated clouds are deleted).
 
   scripts/eval_table.py [NAME ...]      (make eval; EVAL_SWEEPS="a b" selects)
 
-Names: tls-400k-SEED, tls-100k-SEED, tls-1M-SEED, rgbd-SEED,
+Names: tls-400k-SEED, tls-100k-SEED, tls-1M-SEED, rgbd-SEED, lidar16-SEED,
+lidar32-SEED, lidar64-SEED, lidar128-SEED (one sweep of a rotating LiDAR),
 stations3-400k-SEED (three stations of 400k rays each), stations2-400k-SEED;
 beyond-400k-SEED (one station inside and one beyond each door, 400k rays in
 all); -nohandles- before the seed (leaves without handles, e.g.
@@ -57,6 +58,8 @@ def sweep_args(name, config_dir):
     elif parts[0].startswith("mesh"):  # mesh40k: 3 stations of 400k rays in all, merged, 40k vertices
         args = ["--sensor", "tls", "--viewpoints", "3", "--points", "400000",
                 "--mesh-like", str(int(parts[0][len("mesh"):-1]) * 1000), "--first-seed", seed]
+    elif parts[0] in ("lidar16", "lidar32", "lidar64", "lidar128"):
+        args = ["--sensor", parts[0], "--first-seed", seed]
     elif parts[0] == "beyond":  # one station inside, one beyond each door: the rays in total
         args = ["--sensor", "tls", "--beyond-doors", "--points", str(RAYS[parts[1]]), "--first-seed", seed]
     else:

@@ -5,6 +5,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 #include <pcl/io/pcd_io.h>
 #include <pcl/kdtree/kdtree_flann.h>
@@ -13,6 +14,9 @@
 
 #include "door_state_recognition/sim/ground_truth.hpp"
 #include "door_state_recognition/sim/registered.hpp"
+#include "door_state_recognition/sim/drive.hpp"
+#include "door_state_recognition/sim/ground_truth.hpp"
+#include "door_state_recognition/sim/lidar.hpp"
 #include "door_state_recognition/sim/scene.hpp"
 #include "door_state_recognition/sim/sensors.hpp"
 
@@ -414,6 +418,29 @@ SimulatedCloud threeStationScan(const Scene& s, std::uint64_t seed, std::size_t 
   o.viewpoints = 3;
   o.seed = seed;
   return scanTls(s, o);
+// Rotating LiDAR
+
+namespace {
+
+constexpr double kPiTest = 3.14159265358979323846;
+
+// Whether p (world) lies on the surface of some box (within tol) and inside none.
+bool onSomeSurface(const Scene& s, const Eigen::Vector3d& p, double tol) {
+  bool near = false;
+  for (const Box& b : s.boxes) {
+    if (b.contains(p, -tol)) return false;
+    near |= b.contains(p, tol);
+  }
+  return near;
+}
+
+LidarOptions exactLidar(int beams, std::uint64_t seed) {
+  LidarOptions o = LidarOptions::preset(beams);
+  o.range_sigma = 0;
+  o.dropout = 0;
+  o.max_incidence_deg = 90;
+  o.seed = seed;
+  return o;
 }
 
 }  // namespace
@@ -662,4 +689,371 @@ TEST(Clutter, OptionsAreDeterministicAndLeaveThePlainRoomAlone) {
     for (std::size_t i = 0; i < plain.doors.size(); ++i) EXPECT_EQ(cluttered.doors[i].center, plain.doors[i].center);
     EXPECT_GT(cluttered.furniture.size(), plain.furniture.size());
   }
+TEST(Lidar, RingsAreRowsWithOneElevationEachAndColumnsSweepTheAzimuth) {
+  for (const int beams : {16, 32, 64, 128}) {
+    const std::uint64_t seed = 40 + beams;
+    SCOPED_TRACE(seedTrace(seed) + " beams=" + std::to_string(beams));
+    const Scene s = buildScene(randomRoom(seed));
+    LidarOptions o = exactLidar(beams, seed);
+    EXPECT_EQ(o.azimuth_steps, beams <= 32 ? 1800 : 1024);
+    o.azimuth_steps = 512;  // fewer columns keep the test quick (under the sanitizers too)
+    const SimulatedCloud c = scanLidar(s, o);
+    ASSERT_EQ(c.cloud.height, static_cast<std::uint32_t>(beams));
+    ASSERT_EQ(c.cloud.width, static_cast<std::uint32_t>(o.azimuth_steps));
+    ASSERT_EQ(c.cloud.size(), static_cast<std::size_t>(beams) * o.azimuth_steps);
+    EXPECT_EQ(c.sensor, "lidar" + std::to_string(beams));
+    EXPECT_EQ(c.frame_id, "lidar");
+    EXPECT_FALSE(c.cloud.is_dense);
+    EXPECT_NEAR(lidarBeamElevation(o, 0), o.max_elevation_deg * kPiTest / 180, 1e-12);
+    EXPECT_NEAR(lidarBeamElevation(o, beams - 1), o.min_elevation_deg * kPiTest / 180, 1e-12);
+    // REP 103 and level: z up, the head 0.4-1.2 m above the floor.
+    EXPECT_NEAR(c.sensor_to_world.linear().col(2).z(), 1.0, 1e-12);
+    const double h = c.sensor_to_world.translation().z() - s.floor_z;
+    EXPECT_GE(h, 0.4);
+    EXPECT_LE(h, 1.2);
+    std::size_t finite = 0;
+    for (int r = 0; r < beams; ++r)
+      for (int col = 0; col < o.azimuth_steps; col += 3) {
+        const auto& q = c.cloud.at(col, r);
+        if (!std::isfinite(q.x)) continue;
+        ++finite;
+        const Eigen::Vector3d p(q.x, q.y, q.z);
+        EXPECT_NEAR(std::atan2(p.z(), p.head<2>().norm()), lidarBeamElevation(o, r), 2e-5) << "row " << r;
+        const double az = kPiTest - 2 * kPiTest * (col + 0.5) / o.azimuth_steps;
+        EXPECT_NEAR(std::remainder(std::atan2(p.y(), p.x()) - az, 2 * kPiTest), 0.0, 2e-5) << "col " << col;
+        // Noise-free: every return lies on a surface of the scene, inside no box.
+        EXPECT_TRUE(onSomeSurface(s, c.sensor_to_world * p, 2e-3)) << "row " << r << " col " << col;
+      }
+    EXPECT_GT(finite, static_cast<std::size_t>(beams) * o.azimuth_steps / 3 * 9 / 10);  // a closed room returns nearly everywhere
+  }
+}
+
+TEST(Lidar, NoReturnIsNanOrZeroExactlyWhereNothingIsInRange) {
+  const std::uint64_t seed = 7;
+  SCOPED_TRACE(seedTrace(seed));
+  const Scene s = buildScene(oneDoorRoom(100, true, true, 0));
+  LidarOptions o = exactLidar(16, seed);
+  o.azimuth_steps = 360;
+  o.max_range = 2.5;  // the far walls of a 5 x 4 room are out of range
+  o.min_range = 1.0;  // and the near wall, 0.6 m away, too close
+  const WallTruth& w = s.walls[0];
+  o.sensor_to_world = Eigen::Isometry3d(Eigen::Translation3d(w.origin + w.normal * 0.6 + Eigen::Vector3d(0, 0, 0.6)) *
+                                        Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()));
+  const SimulatedCloud c = scanLidar(s, o);
+  o.zeros_for_no_return = true;
+  const SimulatedCloud z = scanLidar(s, o);
+  EXPECT_TRUE(c.sensor_to_world.isApprox(z.sensor_to_world));
+  EXPECT_NEAR(c.sensor_to_world.translation().z(), 0.6, 1e-12);
+  int none = 0, some = 0, near = 0;
+  for (int r = 0; r < 16; ++r)
+    for (int col = 0; col < 360; ++col) {
+      const double el = lidarBeamElevation(o, r), az = kPiTest - 2 * kPiTest * (col + 0.5) / 360;
+      const Eigen::Vector3d d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+      const RayHit h = castRay(s, c.sensor_to_world.translation(), c.sensor_to_world.linear() * d, 1000);
+      const bool expect = h.hit && h.t >= o.min_range && h.t <= o.max_range;
+      near += h.hit && h.t < o.min_range;
+      const auto& q = c.cloud.at(col, r);
+      const auto& qz = z.cloud.at(col, r);
+      EXPECT_EQ(std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z), expect) << "row " << r << " col " << col;
+      if (expect) {
+        EXPECT_NEAR(Eigen::Vector3f(q.x, q.y, q.z).norm(), h.t, 1e-4);
+        EXPECT_EQ(q.label, static_cast<std::uint32_t>(h.surface));
+        ++some;
+      } else {
+        EXPECT_EQ(q.label, 0u);
+        EXPECT_TRUE(qz.x == 0 && qz.y == 0 && qz.z == 0);
+        ++none;
+      }
+    }
+  EXPECT_GT(none, 500);
+  EXPECT_GT(some, 500);
+  EXPECT_GT(near, 100);
+}
+
+TEST(Lidar, SameSeedSameSweepDifferentSeedDifferentSweepAndBadOptionsRefused) {
+  const std::uint64_t seed = 12;
+  SCOPED_TRACE(seedTrace(seed));
+  const Scene s = buildScene(randomRoom(seed));
+  LidarOptions o = LidarOptions::preset(32);
+  o.azimuth_steps = 360;
+  o.seed = seed;
+  const SimulatedCloud a = scanLidar(s, o), b = scanLidar(s, o);
+  o.seed = seed + 1;
+  const SimulatedCloud c = scanLidar(s, o);
+  ASSERT_EQ(a.cloud.size(), b.cloud.size());
+  int same = 0, differ = 0;
+  for (std::size_t i = 0; i < a.cloud.size(); ++i) {
+    const auto &p = a.cloud[i], &q = b.cloud[i];
+    same += (std::isnan(p.x) && std::isnan(q.x)) || (p.x == q.x && p.y == q.y && p.z == q.z);
+    differ += !(std::isnan(p.x) && std::isnan(c.cloud[i].x)) && p.x != c.cloud[i].x;
+  }
+  EXPECT_EQ(same, static_cast<int>(a.cloud.size()));
+  EXPECT_GT(differ, static_cast<int>(a.cloud.size()) / 2);
+  EXPECT_THROW(LidarOptions::preset(24), std::invalid_argument);
+  for (auto bad : std::vector<std::function<void(LidarOptions&)>>{
+           [](LidarOptions& x) { x.beams = 0; }, [](LidarOptions& x) { x.azimuth_steps = 2; },
+           [](LidarOptions& x) { x.min_elevation_deg = 30; }, [](LidarOptions& x) { x.dropout = 1; },
+           [](LidarOptions& x) { x.mast_height = 2.0; }, [](LidarOptions& x) { x.max_range = x.min_range; }}) {
+    LidarOptions x = LidarOptions::preset(16);
+    bad(x);
+    EXPECT_THROW(scanLidar(s, x), std::invalid_argument);
+  }
+}
+
+TEST(Lidar, TruthIsInTheLidarFrameAndDoorsBehindAWallAreOutOfView) {
+  RoomSpec spec = oneDoorRoom(100, true, false, 0);
+  DoorSpec other;
+  other.wall = 0;
+  other.center = -1.0;
+  other.angle_deg = 0;
+  spec.doors.push_back(other);
+  const Scene s = buildScene(spec);
+  LidarOptions o = exactLidar(64, 3);
+  const DoorTruth& d = s.doors[0];
+  const Eigen::Vector3d n = s.walls[d.wall].normal, up(0, 0, 0.8);
+  // In the room, 2 m in front of door 0's wall: both doors in view.
+  o.sensor_to_world = Eigen::Isometry3d(Eigen::Translation3d(d.opening_center + n * 2.0 + d.wall_axis * 1.5 + up));
+  const SimulatedCloud in = scanLidar(s, o);
+  nlohmann::json j = groundTruthJson(s, in);
+  EXPECT_EQ(j["sensor"], "lidar64");
+  EXPECT_EQ(j["frame_id"], "lidar");
+  EXPECT_TRUE(j["doors"][0]["in_view"].get<bool>());
+  EXPECT_TRUE(j["doors"][1]["in_view"].get<bool>());
+  EXPECT_NEAR(j["floor"].get<double>(), -0.8, 1e-9);
+  const auto& oc = j["doors"][0]["opening_center"];
+  EXPECT_LT((in.sensor_to_world * Eigen::Vector3d(oc[0], oc[1], oc[2]) - d.opening_center).norm(), 1e-9);
+  // In the room behind door 0's wall, 1.5 m beside it: door 0 is seen from
+  // behind, door 1 (on the next wall of the room) is hidden by the wall.
+  o.sensor_to_world = Eigen::Isometry3d(
+      Eigen::Translation3d(d.opening_center - n * (spec.wall_thickness / 2 + 1.0) - d.wall_axis * 1.5 + up));
+  j = groundTruthJson(s, scanLidar(s, o));
+  EXPECT_TRUE(j["doors"][0]["in_view"].get<bool>());
+  EXPECT_FALSE(j["doors"][1]["in_view"].get<bool>());
+}
+
+// ---------------------------------------------------------------------------
+// Drives
+
+namespace {
+
+DriveOptions fastDrive(const std::string& sensor, std::uint64_t seed) {
+  DriveOptions o;
+  o.sensor = sensor;
+  o.seed = seed;
+  if (sensor != "rgbd") {
+    LidarOptions l = LidarOptions::preset(lidarBeamsOf(sensor));
+    l.azimuth_steps = 360;  // a coarse head keeps the test quick
+    o.lidar = l;
+  } else {
+    RgbdOptions r;
+    r.width = 80;
+    r.height = 60;
+    r.fx = r.fy = 65.625;
+    r.cx = 39.5;
+    r.cy = 29.5;
+    o.rgbd = r;
+  }
+  return o;
+}
+
+// Horizontal clearance of the robot's centre from every box at 0.1-1 m height.
+bool clearOfBoxes(const Scene& s, const Eigen::Isometry3d& base, double clearance) {
+  for (const double z : {0.1, 0.5, 1.0}) {
+    const Eigen::Vector3d p = base.translation() + Eigen::Vector3d(0, 0, z);
+    for (const Box& b : s.boxes)
+      if (b.surface != Surface::Floor && b.surface != Surface::Ceiling && b.contains(p, clearance)) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+TEST(Drive, FramesComeAtTheRateWithContinuousPosesClearOfTheSceneAndPassEveryDoor) {
+  for (const std::uint64_t seed : {1000u, 1004u, 1007u}) {
+    SCOPED_TRACE(seedTrace(seed));
+    const RoomSpec spec = randomRoom(seed);
+    DriveOptions o = fastDrive("lidar16", seed);
+    o.lidar->azimuth_steps = 90;  // only the truth's sight lines matter here
+    o.rate_hz = 10;
+    const DrivePlan plan = planDrive(spec, o);
+    EXPECT_EQ(plan.frame_count, static_cast<std::size_t>(std::llround(plan.options.seconds * 10)));
+    EXPECT_NEAR(plan.speed, 0.5, 1e-9);  // seconds unset: the path at 0.5 m/s
+    EXPECT_EQ(plan.sensor_frame, "lidar");
+    const double h = plan.sensor_to_base.translation().z();
+    EXPECT_GE(h, 0.4);
+    EXPECT_LE(h, 1.2);
+    const Scene& s = plan.scenes.front();
+    // Every pose (sampled at 100 Hz) continuous and clear of every box by most of the robot's radius.
+    Eigen::Isometry3d prev = plan.baseToMap(0);
+    for (double t = 0.01; t <= plan.options.seconds; t += 0.01) {
+      const Eigen::Isometry3d b = plan.baseToMap(t);
+      EXPECT_LE((b.translation() - prev.translation()).norm(), 0.5 * 0.01 + 1e-6) << "t=" << t;
+      EXPECT_LE(Eigen::AngleAxisd(prev.linear().transpose() * b.linear()).angle(), 60 * kPiTest / 180 * 0.01 + 1e-6) << "t=" << t;
+      EXPECT_NEAR(b.translation().z(), 0.0, 1e-12);
+      EXPECT_NEAR(b.linear().col(2).z(), 1.0, 1e-12);
+      EXPECT_TRUE(clearOfBoxes(s, b, 0.2)) << "t=" << t;
+      prev = b;
+    }
+    // The truth: one path entry per frame at its pose, every reachable door passed within 3 m and seen.
+    const nlohmann::json j = driveTruthJson(plan, 1000.0);
+    ASSERT_EQ(j["drive"]["path"].size(), plan.frame_count);
+    ASSERT_EQ(j["doors"].size(), s.doors.size());
+    for (std::size_t i = 0; i < plan.frame_count; i += 17) {
+      const auto& e = j["drive"]["path"][i];
+      const Eigen::Isometry3d b = plan.baseToMap(plan.frameTime(i));
+      EXPECT_NEAR(e["x"].get<double>(), b.translation().x(), 1e-9);
+      EXPECT_NEAR(e["stamp"].get<double>(), 1000.0 + i / 10.0, 1e-9);
+    }
+    for (std::size_t k = 0; k < s.doors.size(); ++k) {
+      SCOPED_TRACE("door " + std::to_string(k));
+      const auto& d = j["doors"][k];
+      const Eigen::Vector3d c(d["opening_center"][0], d["opening_center"][1], d["opening_center"][2]);
+      EXPECT_LT((c - s.doors[k].opening_center).norm(), 1e-9);  // map = the scene's world
+      EXPECT_EQ(d["state"], s.doors[k].state());
+      if (plan.door_waypoints[k].z() < 0) continue;
+      EXPECT_TRUE(d["passed_within_3m"].get<bool>());
+      EXPECT_GT(d["frames_in_view"].get<int>(), 0);
+    }
+  }
+}
+
+TEST(Drive, CloudsAreInTheSensorFrameAtTheirPoseAndADoorChangesAtItsTime) {
+  const std::uint64_t seed = 1004;
+  SCOPED_TRACE(seedTrace(seed));
+  const RoomSpec spec = randomRoom(seed);
+  ASSERT_GE(spec.doors.size(), 1u);
+  DriveOptions o = fastDrive("lidar32", seed);
+  o.lidar->range_sigma = 0;
+  o.lidar->dropout = 0;
+  o.lidar->max_incidence_deg = 90;
+  o.seconds = 20;
+  o.rate_hz = 2;
+  const double before = spec.doors[0].angle_deg, after = before < 45 ? 90.0 : 0.0;
+  o.changes.push_back({0, after, 7.25});
+  const DrivePlan plan = planDrive(spec, o);
+  ASSERT_EQ(plan.frame_count, 40u);
+  ASSERT_EQ(plan.scenes.size(), 2u);
+  EXPECT_NEAR(plan.scenes[1].doors[0].angle_deg, after, 1e-12);
+  int leaf_points[2] = {0, 0}, moved = 0;  // moved: door 0's returns off its leaf of the other time
+  std::size_t frames = 0;
+  simulateDrive(plan, [&](const DriveFrame& f) {
+    SCOPED_TRACE("frame " + std::to_string(f.index));
+    EXPECT_EQ(f.index, frames++);
+    EXPECT_NEAR(f.t, f.index / 2.0, 1e-12);
+    EXPECT_EQ(f.scene_index, f.t >= 7.25 ? 1 : 0);
+    EXPECT_TRUE(f.cloud.sensor_to_world.isApprox(f.base_to_map * plan.sensor_to_base, 1e-12));
+    EXPECT_EQ(f.cloud.cloud.height, 32u);
+    const Scene& now = plan.scenes[f.scene_index];
+    const Scene& other = plan.scenes[1 - f.scene_index];
+    for (const auto& q : f.cloud.cloud.points) {
+      if (!std::isfinite(q.x)) continue;
+      const Eigen::Vector3d p = f.cloud.sensor_to_world * Eigen::Vector3d(q.x, q.y, q.z);
+      if (q.label != static_cast<std::uint32_t>(Surface::Leaf)) continue;
+      // Leaf returns lie on door 0's leaf as it is at the cloud's time, or on another door's leaf.
+      if (leafOf(now, 0).contains(p, 2e-3)) {
+        ++leaf_points[f.scene_index];
+        moved += !leafOf(other, 0).contains(p, 2e-3);
+      } else {
+        bool another = false;
+        for (std::size_t k = 1; k < now.doors.size(); ++k) another |= leafOf(now, static_cast<int>(k)).contains(p, 2e-3);
+        EXPECT_TRUE(another) << "a leaf return on no leaf of the scene of its time";
+      }
+    }
+  });
+  EXPECT_EQ(frames, 40u);
+  EXPECT_GT(leaf_points[0], 0);
+  EXPECT_GT(leaf_points[1], 0);
+  EXPECT_GT(moved, (leaf_points[0] + leaf_points[1]) / 2);
+  const nlohmann::json j = driveTruthJson(plan);
+  ASSERT_EQ(j["drive"]["changes"].size(), 1u);
+  const auto& c = j["drive"]["changes"][0];
+  EXPECT_EQ(c["door"], 0);
+  EXPECT_EQ(c["first_frame_after"], 15);  // 7.5 s: the first cloud at or after 7.25 s
+  EXPECT_NEAR(c["to_deg"].get<double>(), after, 1e-12);
+  EXPECT_NEAR(j["doors"][0]["opening_angle_deg"].get<double>(), after, 1e-12);        // final state
+  EXPECT_NEAR(j["doors"][0]["initial_opening_angle_deg"].get<double>(), before, 1e-12);
+}
+
+TEST(Drive, EndsBeyondAnOpenDoorwayAndCarriesACameraAtItsHeightAndPitch) {
+  const std::uint64_t seed = 1001;
+  SCOPED_TRACE(seedTrace(seed));
+  RoomSpec spec = randomRoom(seed);
+  for (auto& d : spec.doors) d.angle_deg = 100;
+  DriveOptions o = fastDrive("rgbd", seed);
+  o.mount_height = 0.5;
+  o.camera_pitch_deg = -15;
+  const DrivePlan plan = planDrive(spec, o);
+  EXPECT_EQ(plan.options.rate_hz, 15);
+  EXPECT_EQ(plan.sensor_frame, "camera_depth_optical_frame");
+  const Eigen::Matrix3d R = plan.sensor_to_base.linear();
+  EXPECT_NEAR(R.col(2).z(), std::sin(-15 * kPiTest / 180), 1e-12);  // optical axis pitched down
+  EXPECT_NEAR(R.col(0).z(), 0.0, 1e-12);                              // no roll
+  EXPECT_NEAR(plan.sensor_to_base.translation().z(), 0.5, 1e-12);
+  ASSERT_GE(plan.through_door, 0);
+  const Scene& s = plan.scenes.front();
+  const DoorTruth& d = s.doors[plan.through_door];
+  const Eigen::Vector3d end = plan.baseToMap(plan.options.seconds).translation();
+  const double depth = (end - s.walls[d.wall].origin).dot(s.walls[d.wall].normal);
+  EXPECT_LT(depth, -spec.wall_thickness - 0.5);  // beyond the wall, in the room behind
+  const DriveFrame last = simulateFrame(plan, plan.frame_count - 1);
+  EXPECT_EQ(last.cloud.cloud.width, 80u);
+  EXPECT_EQ(last.cloud.sensor, "rgbd");
+  EXPECT_THROW(simulateFrame(plan, plan.frame_count), std::invalid_argument);
+}
+
+TEST(Drive, RefusesAbsurdOptions) {
+  const RoomSpec spec = randomRoom(5);
+  auto refused = [&](const std::function<void(DriveOptions&)>& change) {
+    DriveOptions o = fastDrive("lidar16", 5);
+    change(o);
+    EXPECT_THROW(planDrive(spec, o), std::invalid_argument);
+  };
+  refused([](DriveOptions& o) { o.sensor = "tls"; });
+  refused([](DriveOptions& o) { o.rate_hz = -1; });
+  refused([](DriveOptions& o) { o.changes.push_back({17, 90, 1}); });
+  refused([&](DriveOptions& o) { o.changes.push_back({0, 190, 1}); });
+  refused([&](DriveOptions& o) { o.changes.push_back({0, 90, 1e6}); });
+  refused([](DriveOptions& o) { o.seconds = 0.5; });  // the turns alone take longer
+  refused([](DriveOptions& o) { o.mount_height = 2.0; });
+  refused([](DriveOptions& o) { o.door_distance = 5; });
+}
+
+TEST(Lidar, AHeadMovingDuringItsSweepCastsEachColumnFromWhereItWas) {
+  const std::uint64_t seed = 21;
+  SCOPED_TRACE(seedTrace(seed));
+  const Scene s = buildScene(oneDoorRoom(30, true, true, 0));
+  LidarOptions o = exactLidar(16, seed);
+  o.azimuth_steps = 720;
+  const Eigen::Isometry3d end = s.room_to_world * Eigen::Translation3d(-0.5, 0.3, 0.8) * Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ());
+  o.sensor_to_world = end;
+  const SimulatedCloud still = scanLidar(s, o);
+  o.sweep_start_to_world = end;  // no motion: the same sweep
+  const SimulatedCloud same = scanLidar(s, o);
+  for (std::size_t i = 0; i < still.cloud.size(); ++i)
+    ASSERT_TRUE((std::isnan(still.cloud[i].x) && std::isnan(same.cloud[i].x)) || still.cloud[i].x == same.cloud[i].x) << i;
+  // 0.3 m back and 20 deg turned at the start (a robot at 3 m/s turning at 200 deg/s: exaggerated).
+  const Eigen::Isometry3d start = end * Eigen::Translation3d(-0.3, 0, 0) * Eigen::AngleAxisd(-0.35, Eigen::Vector3d::UnitZ());
+  o.sweep_start_to_world = start;
+  const SimulatedCloud moving = scanLidar(s, o);
+  EXPECT_TRUE(moving.sensor_to_world.isApprox(end));
+  const Eigen::Isometry3d rel = end.inverse() * start;
+  const Eigen::Quaterniond q0(rel.linear());
+  int on_column_pose = 0, on_end_pose = 0, finite = 0;
+  for (int r = 0; r < 16; ++r)
+    for (int c = 0; c < 720; c += 3) {
+      const auto& q = moving.cloud.at(c, r);
+      if (!std::isfinite(q.x)) continue;
+      ++finite;
+      const double f = (c + 0.5) / 720;
+      Eigen::Isometry3d col = Eigen::Isometry3d::Identity();
+      col.linear() = q0.slerp(f, Eigen::Quaterniond::Identity()).toRotationMatrix();
+      col.translation() = (1 - f) * rel.translation();
+      const Eigen::Vector3d p(q.x, q.y, q.z);
+      // Each point is its beam's range and direction in the head as it was.
+      EXPECT_NEAR(std::atan2(p.z(), p.head<2>().norm()), lidarBeamElevation(o, r), 2e-5);
+      on_column_pose += onSomeSurface(s, end * col * p, 2e-3);
+      on_end_pose += onSomeSurface(s, end * p, 2e-3);
+    }
+  EXPECT_EQ(on_column_pose, finite);       // where the head was, every return lies on a surface
+  EXPECT_LT(on_end_pose, finite * 3 / 4);  // taken at the stamp's pose, the sweep is smeared
 }

@@ -1,9 +1,12 @@
-// Writes a simulated cloud to a rosbag: sensor_msgs/PointCloud2 on /points
-// and the static tf fixed_frame -> cloud frame on /tf_static (latched).
+// Writes simulated clouds to rosbags: one scan (sensor_msgs/PointCloud2 on
+// /points and the static tf fixed_frame -> cloud frame on /tf_static,
+// latched), or a robot's drive (/points in the sensor frame, /tf map ->
+// base_link, /tf_static base_link -> sensor frame, /clock).
 #pragma once
 
 #include <string>
 
+#include "door_state_recognition/sim/drive.hpp"
 #include "door_state_recognition/sim/sensors.hpp"
 
 namespace dsr {
@@ -18,6 +21,16 @@ struct BagOptions {
 
 // Throws std::runtime_error when the bag cannot be written.
 void writeBag(const std::string& path, const sim::SimulatedCloud& cloud, const BagOptions& options);
+
+// A drive: every frame of the plan simulated in turn and written at
+// start_time + t: /clock (rosgraph_msgs/Clock every 10 ms and at every cloud),
+// /tf (map -> base_link at each cloud's stamp), /points (the cloud, in the
+// sensor frame, stamped at its pose's time, recorded 1 ms later), and once,
+// latched, /tf_static base_link -> sensor frame. fixed_frame names map.
+// `each` (may be empty) is given every frame after it is written. Throws
+// std::runtime_error when the bag cannot be written.
+void writeDriveBag(const std::string& path, const sim::DrivePlan& plan, const BagOptions& options,
+                   const std::function<void(const sim::DriveFrame&)>& each = {});
 
 }  // namespace tools
 }  // namespace dsr

@@ -1,20 +1,25 @@
 // door_scene_sim: simulates a scan of a room with doors and writes the cloud
-// (PCD/PLY), its ground truth (JSON) and optionally a rosbag.
+// (PCD/PLY), its ground truth (JSON) and optionally a rosbag; or, with
+// --drive, a robot's drive through the room as a rosbag and its truth.
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
 
 #include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string>
 
 #include "bag_writer.hpp"
 #include "cli_args.hpp"
+#include "door_state_recognition/sim/drive.hpp"
 #include "door_state_recognition/sim/ground_truth.hpp"
 #include "door_state_recognition/sim/registered.hpp"
+#include "door_state_recognition/sim/lidar.hpp"
 #include "door_state_recognition/sim/scene.hpp"
 #include "door_state_recognition/sim/sensors.hpp"
 
@@ -32,7 +37,11 @@ options:
   --formats LIST         comma list of pcd,ply,json,bag (default pcd,json)
   --scene NAME           random (default), paper_livingroom, paper_house, paper_multidoor
   --seed N               random seed (default 1)
-  --sensor tls|rgbd      terrestrial laser scanner (default) or one 640x480 RGB-D frame
+  --sensor NAME          tls: terrestrial laser scanner (default); rgbd: one 640x480
+                         RGB-D frame; lidar16|lidar32|lidar64|lidar128: one sweep of a
+                         rotating LiDAR on a mast 0.4-1.2 m high (organized cloud,
+                         rows = beams from the top, NaN where no return; frame
+                         "lidar", x forward, z up)
   --points N             TLS rays over all viewpoints (default 400000)
   --viewpoints K         TLS scan positions inside the room (default 1); with more
                          than one position in all (K > 1 or --beyond-doors) and
@@ -42,9 +51,13 @@ options:
   --beyond-doors         TLS: one more scan position in the room behind each
                          door, 1.2-2 m beyond it (as a surveyor walks through;
                          the rays still total --points)
-  --noise M              TLS range noise sigma in metres (default 0.005);
+  --noise M              TLS/LiDAR range noise sigma in metres (default TLS 0.005,
+                         LiDAR 0.02 (16, 32 beams) or 0.015 (64, 128));
                          RGB-D: 0 switches the depth noise model off
-  --dropout P            probability of a lost return (default TLS 0, RGB-D 0.02)
+  --dropout P            probability of a lost return (default TLS 0, RGB-D 0.02, LiDAR 0.01)
+  --zeros                LiDAR: (0, 0, 0) instead of NaN where no return
+  --mount-height M       LiDAR head (0.4-1.2 m) or, with --drive, camera (0.3-1.5 m)
+                         height above the floor (default: drawn by the seed)
   --doors MIN:MAX        number of doors of a random room (default 1:3)
   --angle DEG            opening angle of every door, 0..180 (default: random)
   --max-angle DEG        largest random opening angle (default 130)
@@ -70,6 +83,30 @@ options:
                          (2 to MAX+2 of --doors) along the two long walls
   --bag-count N          clouds in the bag (default 3), --bag-rate HZ (default 1)
   --fixed-frame NAME     parent frame of the tf in the bag (default map)
+
+drive (--drive; --sensor lidar16|lidar32|lidar64|lidar128|rgbd, default lidar64;
+--formats bag,json,pcd, default bag,json):
+  --drive                a robot drives through the room past every door (1-3 m
+                         from it) and, when one is open (>= 75 deg) and passable,
+                         ends 1.8 m beyond it in the room behind. PREFIX.bag holds
+                         /points (sensor_msgs/PointCloud2, sensor frame "lidar" or
+                         "camera_depth_optical_frame"), /tf (map -> base_link at
+                         each cloud's stamp), /tf_static (base_link -> sensor frame,
+                         latched), /clock (every 10 ms; play without --clock);
+                         stamps from 1000 s. PREFIX.json: the truth in map, doors
+                         in their final state, changes, path (see sim/drive.hpp);
+                         pcd: every cloud as PREFIX.frameNNNNN.pcd (sensor frame)
+                         with its truth in that frame in PREFIX.frameNNNNN.json
+  --drive-seconds S      duration (default: the path at 0.5 m/s, turns at 60 deg/s)
+  --rate HZ              clouds per second (default 10 LiDAR, 15 RGB-D)
+  --toggle-door K:ANGLE@T  door K is at ANGLE deg from T s after the start on
+                         (repeatable)
+  --door-distance M      pass the doors this far from their wall, 1-3 m (default 1.4)
+  --no-through-door      stay in the room
+  --lidar-motion         LiDAR: the robot moves during each sweep (1 / rate long,
+                         ending at the cloud's stamp); clouds not deskewed
+  --camera-pitch DEG     RGB-D pitch, -20..10, negative down (default: drawn)
+  --rgbd-size WxH        RGB-D image, 320x240 (default for a drive) or 640x480
   --quiet                no summary on stderr
   -h, --help             this text
 )";
@@ -105,21 +142,35 @@ int main(int argc, char** argv) {
   bool merge = false;
   std::string merged_frame;
   long long mesh_vertices = 0;
+  bool drive = false, zeros = false, sensor_given = false, formats_given = false;
+  std::optional<double> mount_height, lidar_noise, lidar_dropout;
+  sim::DriveOptions drive_options;
+  std::string rgbd_size;
+  std::string drive_flag;  // a drive-only flag given
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
       auto value = [&] { return dsr::tools::nextValue(argc, argv, i); };
+      if (a == "--drive-seconds" || a == "--rate" || a == "--toggle-door" || a == "--door-distance" ||
+          a == "--no-through-door" || a == "--camera-pitch" || a == "--rgbd-size" || a == "--lidar-motion")
+        drive_flag = a;
       if (a == "-h" || a == "--help") {
         std::cout << kUsage;
         return 0;
       } else if (a == "--out") out = value();
-      else if (a == "--formats") formats = value();
+      else if (a == "--formats") {
+        formats = value();
+        formats_given = true;
+      }
       else if (a == "--scene") scene_name = value();
       else if (a == "--seed") {
         const long long s = toInt(a, value());
         if (s < 0) throw UsageError("--seed must be >= 0");
         seed = static_cast<std::uint64_t>(s);
-      } else if (a == "--sensor") sensor = value();
+      } else if (a == "--sensor") {
+        sensor = value();
+        sensor_given = true;
+      }
       else if (a == "--points") {
         const long long n = toInt(a, value());
         if (n < 100 || n > 100000000) throw UsageError("--points must lie in [100, 1e8]");
@@ -132,10 +183,12 @@ int main(int argc, char** argv) {
         if (m < 0 || m >= 1) throw UsageError("--noise must lie in [0, 1) m");
         tls.range_sigma = m;
         rgbd.noise = m > 0;
+        lidar_noise = m;
       } else if (a == "--dropout") {
         const double p = toDouble(a, value());
         if (p < 0 || p >= 1) throw UsageError("--dropout must lie in [0, 1)");
         tls.dropout = rgbd.dropout = p;
+        lidar_dropout = p;
       } else if (a == "--doors") std::tie(random_options.min_doors, random_options.max_doors) = toRange(a, value());
       else if (a == "--decoys") std::tie(random_options.min_decoys, random_options.max_decoys) = toRange(a, value());
       else if (a == "--angle") {
@@ -157,10 +210,54 @@ int main(int argc, char** argv) {
       } else if (a == "--clutter") random_options.clutter = true;
       else if (a == "--partition") random_options.partition = true;
       else if (a == "--corridor") random_options.corridor = true;
+      else if (a == "--zeros") zeros = true;
+      else if (a == "--mount-height") mount_height = toDouble(a, value());
+      else if (a == "--drive") drive = true;
+      else if (a == "--drive-seconds") {
+        drive_options.seconds = toDouble(a, value());
+        if (!(drive_options.seconds > 0 && drive_options.seconds <= 3600)) throw UsageError("--drive-seconds must lie in (0, 3600]");
+      } else if (a == "--rate") {
+        drive_options.rate_hz = toDouble(a, value());
+        if (!(drive_options.rate_hz > 0 && drive_options.rate_hz <= 100)) throw UsageError("--rate must lie in (0, 100] Hz");
+      } else if (a == "--toggle-door") {
+        const std::string v = value();
+        const auto colon = v.find(':'), at = v.find('@');
+        if (colon == std::string::npos || at == std::string::npos || at < colon) throw UsageError("--toggle-door needs K:ANGLE@T");
+        sim::DoorChange c;
+        c.door = static_cast<int>(toInt(a, v.substr(0, colon)));
+        c.angle_deg = toDouble(a, v.substr(colon + 1, at - colon - 1));
+        c.t = toDouble(a, v.substr(at + 1));
+        if (c.door < 0 || c.angle_deg < 0 || c.angle_deg > 180 || c.t < 0)
+          throw UsageError("--toggle-door needs K >= 0, ANGLE in [0, 180] and T >= 0");
+        drive_options.changes.push_back(c);
+      } else if (a == "--door-distance") {
+        drive_options.door_distance = toDouble(a, value());
+        if (drive_options.door_distance < 1 || drive_options.door_distance > 3) throw UsageError("--door-distance must lie in [1, 3] m");
+      } else if (a == "--no-through-door") drive_options.through_door = false;
+      else if (a == "--lidar-motion") drive_options.lidar_motion = true;
+      else if (a == "--camera-pitch") {
+        drive_options.camera_pitch_deg = toDouble(a, value());
+        if (*drive_options.camera_pitch_deg < -20 || *drive_options.camera_pitch_deg > 10) throw UsageError("--camera-pitch must lie in [-20, 10] deg");
+      } else if (a == "--rgbd-size") {
+        rgbd_size = value();
+        if (rgbd_size != "320x240" && rgbd_size != "640x480") throw UsageError("--rgbd-size must be 320x240 or 640x480");
+      }
       else throw UsageError("unknown argument '" + a + "'");
     }
     if (out.empty()) throw UsageError("--out PREFIX is required");
-    if (sensor != "tls" && sensor != "rgbd") throw UsageError("--sensor must be tls or rgbd");
+    if (drive && !sensor_given) sensor = "lidar64";
+    const int beams = sim::lidarBeamsOf(sensor);
+    if (sensor != "tls" && sensor != "rgbd" && beams == 0)
+      throw UsageError("--sensor must be tls, rgbd, lidar16, lidar32, lidar64 or lidar128");
+    if (drive && sensor == "tls") throw UsageError("--drive needs --sensor lidar16|lidar32|lidar64|lidar128|rgbd");
+    if (!drive && !drive_flag.empty()) throw UsageError(drive_flag + " is for --drive");
+    if (drive && !formats_given) formats = "bag,json";
+    if (mount_height) {
+      const bool camera = drive && sensor == "rgbd";
+      if (!camera && beams == 0) throw UsageError("--mount-height is for a LiDAR or a drive's camera");
+      if (camera ? (*mount_height < 0.3 || *mount_height > 1.5) : (*mount_height < 0.4 || *mount_height > 1.2))
+        throw UsageError(camera ? "--mount-height must lie in [0.3, 1.5] m for a camera" : "--mount-height must lie in [0.4, 1.2] m for a LiDAR");
+    }
     if (bag.count < 1 || bag.count > 10000 || !(bag.rate_hz > 0 && bag.rate_hz <= 1000))
       throw UsageError("--bag-count must lie in [1, 10000] and --bag-rate in (0, 1000]");
     if (bag.fixed_frame.empty()) throw UsageError("--fixed-frame must not be empty");
@@ -177,6 +274,7 @@ int main(int argc, char** argv) {
     if (merge && sensor != "tls") throw UsageError("--merge and --mesh-like are for --sensor tls");
     if (merge && merged_frame == "map" && fmt.count("bag") && bag.fixed_frame == "map")
       throw UsageError("--merge puts the cloud in frame map: give the bag another --fixed-frame (e.g. world)");
+    if (drive && fmt.count("ply")) throw UsageError("--drive writes bag, json and pcd only");
 
     const auto t_start = std::chrono::steady_clock::now();
     sim::RoomSpec spec = scene_name == "random" ? sim::randomRoom(seed, random_options) : sim::paperRoom(scene_name);
@@ -185,7 +283,75 @@ int main(int argc, char** argv) {
     spec.handles = handles;
     const sim::Scene scene = sim::buildScene(spec);
     tls.seed = rgbd.seed = seed;
-    sim::SimulatedCloud cloud = sensor == "tls" ? sim::scanTls(scene, tls) : sim::captureRgbd(scene, rgbd);
+    sim::LidarOptions lidar;
+    if (beams > 0) {
+      lidar = sim::LidarOptions::preset(beams);
+      if (lidar_noise) lidar.range_sigma = *lidar_noise;
+      if (lidar_dropout) lidar.dropout = *lidar_dropout;
+      lidar.zeros_for_no_return = zeros;
+      if (mount_height) lidar.mast_height = *mount_height;
+      lidar.seed = seed;
+    }
+    if (drive) {
+      drive_options.sensor = sensor;
+      drive_options.seed = seed;
+      drive_options.mount_height = mount_height;
+      if (beams > 0) drive_options.lidar = lidar;
+      else {
+        if (rgbd_size != "640x480") {
+          rgbd.width = 320;
+          rgbd.height = 240;
+          rgbd.fx = rgbd.fy = 262.5;
+          rgbd.cx = 159.5;
+          rgbd.cy = 119.5;
+        }
+        drive_options.rgbd = rgbd;
+      }
+      sim::DrivePlan plan = sim::planDrive(spec, drive_options);
+      plan.map_frame = bag.fixed_frame;
+      if (fmt.count("json")) {
+        std::ofstream js(out + ".json");
+        js << sim::driveTruthJson(plan, bag.start_time).dump(1) << "\n";
+        if (!js) throw std::runtime_error("cannot write " + out + ".json");
+      }
+      // pcd: every frame's cloud (sensor frame) and its truth in that frame, for per-cloud evaluation.
+      auto perFrame = [&](const sim::DriveFrame& f) {
+        if (!fmt.count("pcd")) return;
+        char name[32];
+        std::snprintf(name, sizeof name, ".frame%05zu", f.index);
+        const std::string p = out + name;
+        if (pcl::io::savePCDFileBinary(p + ".pcd", f.cloud.cloud) != 0) throw std::runtime_error("cannot write " + p + ".pcd");
+        std::ofstream js(p + ".json");
+        nlohmann::json t = sim::groundTruthJson(plan.scenes[f.scene_index], f.cloud);
+        for (std::size_t k = 0; k < t["doors"].size(); ++k)
+          t["doors"][k]["in_view"] = sim::sensorSeesDoor(plan.scenes[f.scene_index], f.cloud, static_cast<int>(k));
+        t["stamp"] = bag.start_time + f.t;
+        js << t.dump(1) << "\n";
+        if (!js) throw std::runtime_error("cannot write " + p + ".json");
+      };
+      if (fmt.count("bag")) tools::writeDriveBag(out + ".bag", plan, bag, perFrame);
+      else if (fmt.count("pcd")) sim::simulateDrive(plan, perFrame);
+      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_start).count();
+      if (!quiet) {
+        std::cerr << "door_scene_sim: scene " << spec.name << " (" << spec.width << " x " << spec.depth << " x "
+                  << spec.height << " m), " << plan.scenes[0].doors.size() << " door(s); drive of " << plan.options.seconds
+                  << " s, " << plan.path_length << " m at " << plan.speed << " m/s, " << plan.frame_count << " " << sensor
+                  << " clouds at " << plan.options.rate_hz << " Hz, sensor " << *plan.options.mount_height << " m high"
+                  << (plan.through_door >= 0 ? ", through door " + std::to_string(plan.through_door) : std::string(", no doorway driven through"))
+                  << "; written in " << static_cast<int>(ms) << " ms\n";
+        for (std::size_t i = 0; i < plan.scenes[0].doors.size(); ++i) {
+          const auto& d = plan.scenes[0].doors[i];
+          std::cerr << "  door " << i << ": " << d.state() << " at " << d.angle_deg << " deg"
+                    << (plan.door_waypoints[i].z() < 0 ? " (not reachable: not passed)" : "") << "\n";
+        }
+        for (const auto& c : plan.changes)
+          std::cerr << "  door " << c.door << " -> " << c.angle_deg << " deg at " << c.t << " s\n";
+      }
+      return 0;
+    }
+    sim::SimulatedCloud cloud = sensor == "tls" ? sim::scanTls(scene, tls)
+                                : beams > 0     ? sim::scanLidar(scene, lidar)
+                                                : sim::captureRgbd(scene, rgbd);
     if (merge) cloud = sim::mergeStations(scene, cloud, {sim::mergedFrameFromString(merged_frame), seed});
     if (mesh_vertices > 0) {
       sim::MeshLikeOptions mesh;

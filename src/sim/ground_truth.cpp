@@ -1,5 +1,7 @@
 #include "door_state_recognition/sim/ground_truth.hpp"
 
+#include "door_state_recognition/sim/lidar.hpp"
+
 namespace dsr {
 namespace sim {
 namespace {
@@ -7,7 +9,8 @@ namespace {
 nlohmann::json vec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
 // A camera sees a door when the middle of its doorway, 1 m above the floor,
-// projects into the image within range; a laser scanner sees every door.
+// projects into the image within range; a laser scanner sees every door (a
+// rotating LiDAR: see lidarSeesDoor).
 bool inView(const SimulatedCloud& c, const Eigen::Vector3d& p_sensor) {
   if (c.sensor != "rgbd") return true;
   const RgbdOptions& o = c.rgbd;
@@ -49,7 +52,8 @@ nlohmann::json groundTruthJson(const Scene& scene, const SimulatedCloud& cloud) 
     door["recess"] = d.recess;
     door["wall"] = d.wall;
     door["wall_normal"] = vec(R * d.wall_normal);
-    door["in_view"] = inView(cloud, W2S * (d.opening_center + Eigen::Vector3d(0, 0, 1.0)));
+    door["in_view"] = cloud.lidar_beams > 0 ? lidarSeesDoor(scene, cloud, static_cast<int>(&d - scene.doors.data()))
+                                            : inView(cloud, W2S * (d.opening_center + Eigen::Vector3d(0, 0, 1.0)));
     nlohmann::json corners = nlohmann::json::array();
     for (const auto& c : d.leaf_corners) corners.push_back(vec(W2S * c));
     door["leaf_corners"] = corners;

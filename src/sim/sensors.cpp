@@ -4,30 +4,13 @@
 #include <limits>
 #include <stdexcept>
 
+#include "ray_random.hpp"
+
 namespace dsr {
 namespace sim {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-// Counter-based random numbers: the value for (seed, stream, index) does not
-// depend on the order rays are processed in, so threads keep results exact.
-std::uint64_t splitmix(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
-struct RayRandom {
-  std::uint64_t state;
-  RayRandom(std::uint64_t seed, std::uint64_t stream, std::uint64_t index)
-      : state(splitmix(seed ^ splitmix(stream * 0x100000001B3ull ^ splitmix(index)))) {}
-  double uniform() {
-    state = splitmix(state);
-    return ((state >> 11) + 0.5) * (1.0 / 9007199254740992.0);
-  }
-  double gaussian() { return std::sqrt(-2.0 * std::log(uniform())) * std::cos(2 * kPi * uniform()); }
-};
 
 // A box prepared for ray tests: world-to-local rotation and centre.
 struct PreparedBox {
@@ -192,6 +175,7 @@ SimulatedCloud captureRgbd(const Scene& scene, const RgbdOptions& o) {
   requireOption(o.dropout >= 0 && o.dropout < 1, "dropout must lie in [0, 1)");
   requireOption(!scene.doors.empty() || o.target_door < 0, "target door given but the scene has no door");
   requireOption(o.target_door < static_cast<int>(scene.doors.size()), "target door out of range");
+  requireOption(!o.camera_to_world || o.camera_to_world->matrix().allFinite(), "camera pose must be finite");
 
   SimulatedCloud out;
   out.sensor = "rgbd";
@@ -202,7 +186,10 @@ SimulatedCloud captureRgbd(const Scene& scene, const RgbdOptions& o) {
 
   // Place the camera in front of a door, looking at it.
   Eigen::Vector3d cam, target;
-  if (scene.doors.empty()) {
+  if (o.camera_to_world) {  // placed by the caller
+    cam = o.camera_to_world->translation();
+    target = cam + o.camera_to_world->linear().col(2);
+  } else if (scene.doors.empty()) {
     cam = freePoint(scene, rnd, 0.5, 0.9, 1.5);
     target = scene.walls[0].origin + up * 1.0;
   } else {
@@ -223,7 +210,7 @@ SimulatedCloud captureRgbd(const Scene& scene, const RgbdOptions& o) {
     target = face_center + wall.axis * ((rnd.uniform() - 0.5) * 0.6) + up * (0.8 + 0.5 * rnd.uniform());
   }
   Eigen::Vector3d f = (target - cam).normalized();
-  if (o.avoid_ceiling) {
+  if (o.avoid_ceiling && !o.camera_to_world) {
     // Lower the pitch until the top image row meets the far wall below the ceiling.
     const double horiz = std::hypot(f.x(), f.y());
     double pitch = std::atan2(f.z(), horiz);
@@ -245,6 +232,7 @@ SimulatedCloud captureRgbd(const Scene& scene, const RgbdOptions& o) {
   out.sensor_to_world.linear().col(1) = y;
   out.sensor_to_world.linear().col(2) = f;
   out.sensor_to_world.translation() = cam;
+  if (o.camera_to_world) out.sensor_to_world = *o.camera_to_world;
   out.viewpoints_world.push_back(cam);
 
   const std::vector<PreparedBox> boxes = prepare(scene);

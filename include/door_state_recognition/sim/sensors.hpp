@@ -7,6 +7,7 @@
 #include <pcl/point_types.h>
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,20 +36,27 @@ struct RgbdOptions {
   double max_incidence_deg = 80;   // steeper grazing angles return nothing
   int target_door = -1;            // door the camera looks at (-1: chosen by the seed)
   bool avoid_ceiling = true;       // pitch so that no ceiling is in view
+  // Pose of the optical frame in the world (a camera on a robot); unset:
+  // placed in front of a door by the seed as above (target_door, avoid_ceiling).
+  std::optional<Eigen::Isometry3d> camera_to_world;
   std::uint64_t seed = 1;
 };
 
 struct SimulatedCloud {
   // Points in the sensor frame. TLS: unorganized, finite points only.
-  // RGB-D: organized width x height, NaN where no return.
+  // RGB-D: organized width x height, NaN where no return. LiDAR: organized
+  // azimuth steps x beams, NaN (or zeros) where no return.
   // label = sim::Surface of the surface hit (ground truth, never an input).
   pcl::PointCloud<pcl::PointXYZL> cloud;
   Eigen::Isometry3d sensor_to_world = Eigen::Isometry3d::Identity();  // pose of the cloud frame
-  std::string sensor;    // "tls" | "rgbd"
-  std::string frame_id;  // "tls_scanner" | "camera_depth_optical_frame"
+  std::string sensor;    // "tls" | "rgbd" | "lidar16" | "lidar32" | "lidar64" | "lidar128"
+  std::string frame_id;  // "tls_scanner" | "camera_depth_optical_frame" | "lidar"
   std::vector<Eigen::Vector3d> viewpoints_world;
   std::vector<int> station;  // TLS: index into viewpoints_world of the scan position each point was seen from
   RgbdOptions rgbd;      // intrinsics used (RGB-D only)
+  // Rotating LiDAR only (sim/lidar.hpp): the vertical field of view swept and the range.
+  int lidar_beams = 0;
+  double lidar_min_elevation_deg = 0, lidar_max_elevation_deg = 0, lidar_max_range = 0;
 };
 
 struct RayHit {
