@@ -4,7 +4,7 @@ each, scores every report against its truth with door_state_eval, and prints
 the merged figures as JSON (plus one line per scene with --verbose).
 
   scripts/eval_sweep.py [--sensor tls|rgbd] [--scenes N] [--first-seed S]
-                        [--points N] [--viewpoints K] [--beyond-doors] [--no-handles] [--up AXIS] [--config FILE] [--jobs J]
+                        [--points N] [--viewpoints K] [--beyond-doors] [--no-handles] [--depth-model M] [--robot-camera] [--up AXIS] [--config FILE] [--jobs J]
                         [--verbose] [--out DIR]
 """
 import argparse, json, os, subprocess, sys, tempfile
@@ -18,6 +18,9 @@ def one(args, seed, out):
     prefix = out / f"{args.sensor}_{seed}"
     sim = [str(BIN / "door_scene_sim"), "--quiet", "--sensor", args.sensor, "--seed", str(seed),
            "--out", str(prefix), "--formats", "pcd,json"] + (["--no-handles"] if args.no_handles else [])
+    if args.sensor == "rgbd":
+        sim += ["--depth-model", args.depth_model] if args.depth_model else []
+        sim += ["--robot-camera"] if args.robot_camera else []
     if args.sensor == "tls":
         sim += ["--points", str(args.points), "--noise", str(args.noise), "--viewpoints", str(args.viewpoints)]
         sim += ["--beyond-doors"] if args.beyond_doors else []
@@ -49,6 +52,9 @@ def main():
     ap.add_argument("--beyond-doors", action="store_true",
                     help="TLS: one more station in the room behind each door (door_scene_sim --beyond-doors)")
     ap.add_argument("--no-handles", action="store_true", help="leaves without handles (door_scene_sim --no-handles)")
+    ap.add_argument("--depth-model", default=None, choices=["default", "structured", "tof", "stereo"],
+                    help="RGB-D depth error of a camera family (door_scene_sim --depth-model)")
+    ap.add_argument("--robot-camera", action="store_true", help="RGB-D pose as robots carry it (door_scene_sim --robot-camera)")
     ap.add_argument("--up", default=None)
     ap.add_argument("--config", default=None, help="parameters YAML passed to door_state_cli")
     ap.add_argument("--jobs", type=int, default=2)
@@ -57,6 +63,8 @@ def main():
     args = ap.parse_args()
     if args.sensor != "tls" and (args.beyond_doors or args.viewpoints != 1):
         ap.error("--beyond-doors and --viewpoints are for --sensor tls")
+    if args.sensor != "rgbd" and (args.depth_model or args.robot_camera):
+        ap.error("--depth-model and --robot-camera are for --sensor rgbd")
     out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="dsr_sweep_"))
     out.mkdir(parents=True, exist_ok=True)
     seeds = range(args.first_seed, args.first_seed + args.scenes)
@@ -81,6 +89,8 @@ def main():
                                      "state_accuracy", "angle_mae_deg", "angle_mae_measured_deg",
                                      "angle_lower_bounds", "hinge_error_median_m"]}
     summary.update(sensor=args.sensor, first_seed=args.first_seed)
+    if args.sensor == "rgbd":
+        summary.update(depth_model=args.depth_model or "default", robot_camera=args.robot_camera)
     if args.sensor == "tls":
         summary.update(points=args.points, viewpoints=args.viewpoints, beyond_doors=args.beyond_doors)
     print(json.dumps(summary, indent=1))

@@ -16,6 +16,10 @@ beyond-400k-SEED (one station inside and one beyond each door, 400k rays in
 all); -nohandles- before the seed (leaves without handles, e.g.
 rgbd-nohandles-SEED); -bound5- before the seed (tls-400k-bound5-SEED, stations3-400k-bound5-SEED)
 runs with unseen_leaf_min_bound_deg 5.
+RGB-D camera families (not in the default list): rgbd-structured-SEED,
+rgbd-tof-SEED, rgbd-stereo-SEED (door_scene_sim --depth-model), and
+-robot- before the seed (rgbd-tof-robot-SEED, rgbd-robot-SEED: the camera's
+pose as robots carry it, --robot-camera).
 """
 import json, os, shutil, subprocess, sys, tempfile
 from pathlib import Path
@@ -41,6 +45,8 @@ def sweep_args(name, config_dir):
     seed = parts[-1]
     if parts[0] == "rgbd":
         args = ["--sensor", "rgbd", "--first-seed", seed]
+        args += next((["--depth-model", m] for m in ("structured", "tof", "stereo") if m in parts), [])
+        args += ["--robot-camera"] if "robot" in parts else []
     elif parts[0] == "beyond":  # one station inside, one beyond each door: the rays in total
         args = ["--sensor", "tls", "--beyond-doors", "--points", str(RAYS[parts[1]]), "--first-seed", seed]
     else:
