@@ -1,5 +1,6 @@
 #include "door_state_recognition/pipeline/pipeline.hpp"
 #include "door_state_recognition/pipeline/stopwatch.hpp"
+#include "door_state_recognition/pipeline/input_checks.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -76,6 +77,11 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   Stopwatch watch(&res.timing_ms);
   res.points_in = cloud.size();
   const bool organized = cloud.height > 1;  // a camera frame: no return means nothing in range
+  if (const std::optional<std::string> why = implausibleInput(cloud, viewpoint_in)) {
+    res.warnings.push_back(*why);
+    watch.total();
+    return res;
+  }
 
   // --- preprocess: sanitise, downsample ---------------------------------------
   preprocess::Points thinned;
@@ -174,6 +180,8 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   }
   res.floor = fc.floor;
   res.ceiling = fc.ceiling;
+  if (const std::optional<std::string> why = singleSurface(pts, normals.n, viewpoint, p.up_axis != "auto"))
+    res.warnings.push_back(*why);
   if (vertical_z.size() < 20) {
     res.warnings.push_back("no vertical structure: no walls");
     watch.total();
