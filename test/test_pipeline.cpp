@@ -121,6 +121,58 @@ TEST(Levelling, RotationTakesEveryAxisToUp) {
   EXPECT_THROW(preprocess::parseUpAxis("up"), std::invalid_argument);
 }
 
+TEST(Levelling, RefinementEndsOnOneAxisFromStartsAFewDegreesApart) {
+  // A camera frame's normals: the refinement from -y and from -y tilted by
+  // 0.5-3 deg ends on the same axis, to the bit (a fixed point of the data).
+  for (const std::uint64_t seed : {1002ull, 1013ull}) {
+    SCOPED_TRACE("seed=" + std::to_string(seed));
+    sim::RgbdOptions o;
+    o.seed = seed;
+    const pcl::PointCloud<pcl::PointXYZ> c = xyz(sim::captureRgbd(sim::buildScene(sim::randomRoom(seed)), o).cloud);
+    const preprocess::Points pts = preprocess::sanitizeAndDownsample(c, 1e4, 0.02);
+    segmentation::NeighbourGrid grid(pts, 0.03f);
+    const segmentation::Normals normals = segmentation::estimateNormals(pts, grid, 16, Eigen::Vector3f::Zero());
+    const Eigen::Vector3d base = preprocess::refineUp(-Eigen::Vector3d::UnitY(), normals.n, 15.0);
+    for (const double deg : {0.5, 1.0, 3.0})
+      for (const Eigen::Vector3d axis : {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ()}) {
+        const Eigen::Vector3d start = Eigen::AngleAxisd(deg * M_PI / 180, axis) * -Eigen::Vector3d::UnitY();
+        EXPECT_EQ(preprocess::refineUp(start, normals.n, 15.0), base) << deg << " deg about " << axis.transpose();
+      }
+  }
+}
+
+TEST(Levelling, AnAxisGivenAndOneEstimatedGiveTheSameDoorsWhenTheyAgree) {
+  // Frames (the sweep's seeds, three camera families) where `auto` finds
+  // the camera's -y within a degree: both runs level the frame alike and
+  // report the same doors, states and angles.
+  struct Case {
+    std::uint64_t seed;
+    sim::DepthModel model;
+  };
+  for (const Case c : {Case{1002, sim::DepthModel::Default}, Case{1013, sim::DepthModel::Default},
+                       Case{1017, sim::DepthModel::Default}, Case{1011, sim::DepthModel::StructuredLight},
+                       Case{1012, sim::DepthModel::ActiveStereo}}) {
+    SCOPED_TRACE("seed=" + std::to_string(c.seed) + " model=" + sim::toString(c.model));
+    sim::RgbdOptions o;
+    o.seed = c.seed;
+    o.depth_model = c.model;
+    const pcl::PointCloud<pcl::PointXYZ> cloud =
+        xyz(sim::captureRgbd(sim::buildScene(sim::randomRoom(c.seed)), o).cloud);
+    Parameters given, estimated;
+    given.up_axis = "-y";
+    estimated.up_axis = "auto";
+    const PipelineResult a = Pipeline(given).run(cloud, false), b = Pipeline(estimated).run(cloud, false);
+    ASSERT_LT(std::acos(std::min(1.0, a.up.dot(b.up))) * 180 / M_PI, 1.0) << a.up.transpose() << " vs " << b.up.transpose();
+    EXPECT_EQ(a.up, b.up);
+    ASSERT_EQ(a.doors.size(), b.doors.size());
+    for (std::size_t i = 0; i < a.doors.size(); ++i) {
+      EXPECT_EQ(a.doors[i].state, b.doors[i].state);
+      EXPECT_NEAR(a.doors[i].opening_angle_deg, b.doors[i].opening_angle_deg, 1.0);
+      EXPECT_LT((a.doors[i].opening_center - b.doors[i].opening_center).norm(), 0.05);
+    }
+  }
+}
+
 TEST(Preprocess, SanitizeDropsNonFiniteAndAbsurdPoints) {
   pcl::PointCloud<pcl::PointXYZ> c;
   const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();

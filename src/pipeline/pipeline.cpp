@@ -133,13 +133,14 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
         error.run([&] { no_return = preprocess::noReturnRays(cloud, viewpoint_in.cast<float>()); });
       }
       error.run([&] {
+        // One levelling path: an axis given and one estimated seed the same
+        // refinement, whose fixed point is the same from any seed near it,
+        // so that both give the same doors when they agree.
         std::optional<Eigen::Vector3d> up = preprocess::parseUpAxis(p.up_axis);
-        if (!up) {
-          up = preprocess::estimateUp(thinned, normals.n, static_cast<unsigned>(p.random_seed));
-          if (up) up = preprocess::refineUp(*up, normals.n, 10.0);
-        } else if (p.refine_up_deg > 0) {
-          up = preprocess::refineUp(*up, normals.n, p.refine_up_deg);
-        }
+        const bool given = up.has_value();
+        if (!given) up = preprocess::estimateUp(thinned, normals.n, static_cast<unsigned>(p.random_seed));
+        if (up && (!given || p.refine_up_deg > 0))
+          up = preprocess::refineUp(*up, normals.n, p.refine_up_deg > 0 ? p.refine_up_deg : 10.0);
         if (!up) {
           res.warnings.push_back("up axis could not be estimated; using +z");
           up = Eigen::Vector3d::UnitZ();
