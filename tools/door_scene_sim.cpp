@@ -32,7 +32,7 @@ options:
   --formats LIST         comma list of pcd,ply,json,bag (default pcd,json)
   --scene NAME           random (default), paper_livingroom, paper_house, paper_multidoor
   --seed N               random seed (default 1)
-  --sensor tls|rgbd      terrestrial laser scanner (default) or one 640x480 RGB-D frame
+  --sensor tls|rgbd      terrestrial laser scanner (default) or one RGB-D frame
   --points N             TLS rays over all viewpoints (default 400000)
   --viewpoints K         TLS scan positions inside the room (default 1); with more
                          than one position in all (K > 1 or --beyond-doors) and
