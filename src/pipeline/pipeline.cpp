@@ -134,13 +134,18 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
       }
       error.run([&] {
         // One levelling path: an axis given and one estimated seed the same
-        // refinement, whose fixed point is the same from any seed near it,
-        // so that both give the same doors when they agree.
+        // refinement, so that both give the same doors when they agree.
+        // Sensors are mounted upright or on a side (a camera's -y, a
+        // scanner's +z): an estimate within the refinement's reach of one of
+        // the frame's axes is refined from that axis, as if it were given.
         std::optional<Eigen::Vector3d> up = preprocess::parseUpAxis(p.up_axis);
         const bool given = up.has_value();
-        if (!given) up = preprocess::estimateUp(thinned, normals.n, static_cast<unsigned>(p.random_seed));
-        if (up && (!given || p.refine_up_deg > 0))
-          up = preprocess::refineUp(*up, normals.n, p.refine_up_deg > 0 ? p.refine_up_deg : 10.0);
+        const double reach = p.refine_up_deg > 0 ? p.refine_up_deg : 10.0;
+        if (!given) {
+          up = preprocess::estimateUp(thinned, normals.n, static_cast<unsigned>(p.random_seed));
+          if (up) up = preprocess::nearestFrameAxis(*up, reach);
+        }
+        if (up && (!given || p.refine_up_deg > 0)) up = preprocess::refineUp(*up, normals.n, reach);
         if (!up) {
           res.warnings.push_back("up axis could not be estimated; using +z");
           up = Eigen::Vector3d::UnitZ();
