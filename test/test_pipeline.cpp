@@ -121,24 +121,11 @@ TEST(Levelling, RotationTakesEveryAxisToUp) {
   EXPECT_THROW(preprocess::parseUpAxis("up"), std::invalid_argument);
 }
 
-TEST(Levelling, RefinementEndsOnOneAxisFromStartsAFewDegreesApart) {
-  // A camera frame's normals: the refinement from -y and from -y tilted by
-  // 0.5-3 deg ends on the same axis, to the bit (a fixed point of the data).
-  for (const std::uint64_t seed : {1002ull, 1013ull}) {
-    SCOPED_TRACE("seed=" + std::to_string(seed));
-    sim::RgbdOptions o;
-    o.seed = seed;
-    const pcl::PointCloud<pcl::PointXYZ> c = xyz(sim::captureRgbd(sim::buildScene(sim::randomRoom(seed)), o).cloud);
-    const preprocess::Points pts = preprocess::sanitizeAndDownsample(c, 1e4, 0.02);
-    segmentation::NeighbourGrid grid(pts, 0.03f);
-    const segmentation::Normals normals = segmentation::estimateNormals(pts, grid, 16, Eigen::Vector3f::Zero());
-    const Eigen::Vector3d base = preprocess::refineUp(-Eigen::Vector3d::UnitY(), normals.n, 15.0);
-    for (const double deg : {0.5, 1.0, 3.0})
-      for (const Eigen::Vector3d axis : {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ()}) {
-        const Eigen::Vector3d start = Eigen::AngleAxisd(deg * M_PI / 180, axis) * -Eigen::Vector3d::UnitY();
-        EXPECT_EQ(preprocess::refineUp(start, normals.n, 15.0), base) << deg << " deg about " << axis.transpose();
-      }
-  }
+TEST(Levelling, AnEstimateNearAFrameAxisIsThatAxis) {
+  EXPECT_EQ(preprocess::nearestFrameAxis(Eigen::Vector3d(0.05, -1.0, 0.1), 15.0), -Eigen::Vector3d::UnitY());
+  EXPECT_EQ(preprocess::nearestFrameAxis(Eigen::Vector3d(0.0, 0.2, 3.0), 15.0), Eigen::Vector3d::UnitZ());
+  const Eigen::Vector3d tilted = Eigen::AngleAxisd(20 * M_PI / 180, Eigen::Vector3d::UnitX()) * Eigen::Vector3d::UnitZ();
+  EXPECT_LT((preprocess::nearestFrameAxis(tilted * 2.0, 15.0) - tilted).norm(), 1e-12);
 }
 
 TEST(Levelling, AnAxisGivenAndOneEstimatedGiveTheSameDoorsWhenTheyAgree) {
@@ -146,7 +133,7 @@ TEST(Levelling, AnAxisGivenAndOneEstimatedGiveTheSameDoorsWhenTheyAgree) {
   // the camera's -y within a degree: both runs level the frame alike and
   // report the same doors, states and angles.
   // Stereo frames to 8 m (door_scene_sim's), 1012 and 1024: refined from
-  // their own estimates, 0.03-0.04 deg from -y's, they found other doors.
+  // their own estimates, 0.03-0.14 deg from -y's, they found other doors.
   struct Case {
     std::uint64_t seed;
     sim::DepthModel model;

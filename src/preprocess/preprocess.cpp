@@ -568,61 +568,36 @@ std::optional<Eigen::Vector3d> estimateUp(const Points& points, const Points& no
 
 Eigen::Vector3d refineUp(const Eigen::Vector3d& up_in, const Points& normals, double max_deg) {
   const Eigen::Vector3d up = up_in.normalized();
-  const double cos_max = std::cos(max_deg * M_PI / 180.0), cos_fine = std::cos(3.0 * M_PI / 180.0);
-  // One levelling path: whatever the axis it starts from (given, or
-  // estimated), the refinement ends on a fixed point of the data, the same
-  // from any start near it. Horizontal surfaces: the mean normal of those
-  // within max_deg of the axis, then of those within 3 deg of that mean,
-  // again until the normals taken no longer change (then neither does their
-  // mean, to the bit).
-  auto meanNormal = [&](const Eigen::Vector3d& axis, double cos_lim, std::size_t* count) {
+  const double cos_max = std::cos(max_deg * M_PI / 180.0);
+  Eigen::Vector3d current = up;
+  // Two rounds: horizontal surfaces first, re-selected around the refined axis.
+  for (int round = 0; round < 2; ++round) {
     Eigen::Vector3d acc = Eigen::Vector3d::Zero();
     std::size_t n = 0;
     for (const auto& nf : normals) {
       const Eigen::Vector3d nd = nf.cast<double>();
-      const double c = nd.dot(axis);
-      if (std::abs(c) < cos_lim) continue;
+      const double c = nd.dot(current);
+      if (std::abs(c) < (round == 0 ? cos_max : std::cos(3.0 * M_PI / 180.0))) continue;
       acc += c > 0 ? nd : Eigen::Vector3d(-nd);
       ++n;
     }
-    *count = n;
-    return n > 0 ? Eigen::Vector3d(acc.normalized()) : axis;
-  };
-  Eigen::Vector3d current = up;
-  std::size_t n = 0;
-  const Eigen::Vector3d first = meanNormal(up, cos_max, &n);
-  if (n >= 200) {
-    current = first;
-    for (int round = 0; round < 50; ++round) {
-      const Eigen::Vector3d next = meanNormal(current, cos_fine, &n);
-      if (n < 200 || next == current) break;
-      current = next;
-    }
+    if (n < 200) break;
+    current = acc.normalized();
   }
   if (current != up && current.dot(up) >= cos_max) return current;
-  // Walls: up is the direction least present among vertical-surface normals
-  // (those within max_deg of perpendicular to it), again to a fixed point.
-  const double sin_max = std::sin(max_deg * M_PI / 180.0);
-  Eigen::Vector3d v = up;
-  for (int round = 0; round < 50; ++round) {
-    Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-    std::size_t m = 0;
-    for (const auto& nf : normals) {
-      const Eigen::Vector3d nd = nf.cast<double>();
-      if (std::abs(nd.dot(v)) > sin_max) continue;
-      C += nd * nd.transpose();
-      ++m;
-    }
-    if (m < 500) break;
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
-    Eigen::Vector3d w = es.eigenvectors().col(0);
-    if (w.dot(up) < 0) w = -w;
-    if (w == v || w.dot(up) < cos_max) {
-      if (w.dot(up) >= cos_max) v = w;
-      break;
-    }
-    v = w;
+  // Walls: up is the direction least present among vertical-surface normals.
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  std::size_t n = 0;
+  for (const auto& nf : normals) {
+    const Eigen::Vector3d nd = nf.cast<double>();
+    if (std::abs(nd.dot(up)) > std::sin(max_deg * M_PI / 180.0)) continue;
+    C += nd * nd.transpose();
+    ++n;
   }
+  if (n < 500) return up;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
+  Eigen::Vector3d v = es.eigenvectors().col(0);
+  if (v.dot(up) < 0) v = -v;
   return v.dot(up) >= cos_max ? v : up;
 }
 

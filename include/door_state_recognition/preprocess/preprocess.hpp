@@ -48,11 +48,9 @@ Points noReturnRays(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Ve
 std::optional<Eigen::Vector3d> estimateUp(const Points& points, const Points& normals, unsigned seed);
 
 // Refines an approximate up axis (a camera frame is rarely exactly level):
-// the mean normal of horizontal surfaces within max_deg of it, re-taken
-// within 3 deg of the mean until the normals taken no longer change, or else
-// the direction perpendicular to the normals of the vertical surfaces, again
-// to a fixed point. Starts a few degrees apart (an axis given, one estimated)
-// end on the same axis. Returns the given axis when neither is seen.
+// the mean normal of horizontal surfaces within max_deg of it, or else the
+// direction perpendicular to the normals of the vertical surfaces. Returns
+// the given axis when neither is seen.
 Eigen::Vector3d refineUp(const Eigen::Vector3d& up, const Points& normals, double max_deg);
 
 // The axis of the frame (+x ... -z) within max_deg of `dir`, or `dir`
