@@ -91,7 +91,7 @@ std::optional<std::string> singleSurface(const std::vector<Eigen::Vector3f>& poi
     const double below = e.z() > 0 ? -d : d;  // the plane's depth below the viewpoint
     std::snprintf(buf, sizeof buf, "only a %s in view (one plane holds %.0f%% of the points, %.2f m %s the sensor)%s: no walls, no doors",
                   below > 0 ? "floor" : "ceiling", 100 * share, std::abs(below), below > 0 ? "below" : "above",
-                  up_given ? "" : ", or one surface close up levelled as one (the up axis was estimated from it)");
+                  up_given ? "" : ", or one surface close up levelled as a floor (the up axis was estimated from it: give the sensor's)");
     return std::string(buf);
   }
   if (std::abs(e.z()) < 0.25f && std::abs(d) < 1.5) {
