@@ -6,7 +6,7 @@ the merged figures as JSON (plus one line per scene with --verbose).
   scripts/eval_sweep.py [--sensor tls|rgbd|lidar16|lidar32|lidar64|lidar128] [--scenes N] [--first-seed S]
                         [--points N] [--viewpoints K] [--beyond-doors] [--no-handles] [--up AXIS] [--config FILE] [--jobs J]
                         [--merge] [--mesh-like N] [--clutter] [--partition] [--corridor]
-                        [--verbose] [--out DIR]
+                        [--depth-model M] [--robot-camera] [--verbose] [--out DIR]
 
 With --merge or --mesh-like the CLI gets the one merged cloud (VIEWPOINT 0 0 0,
 frame map), as a user holding a registered export would run it.
@@ -26,6 +26,9 @@ def one(args, seed, out):
     merged = args.merge or args.mesh_like > 0
     sim += ["--merge"] if args.merge else []
     sim += ["--mesh-like", str(args.mesh_like)] if args.mesh_like > 0 else []
+    if args.sensor == "rgbd":
+        sim += ["--depth-model", args.depth_model] if args.depth_model else []
+        sim += ["--robot-camera"] if args.robot_camera else []
     if args.sensor == "tls":
         sim += ["--points", str(args.points), "--noise", str(args.noise), "--viewpoints", str(args.viewpoints)]
         sim += ["--beyond-doors"] if args.beyond_doors else []
@@ -64,6 +67,9 @@ def main():
     ap.add_argument("--clutter", action="store_true", help="random rooms with clutter (door_scene_sim --clutter)")
     ap.add_argument("--partition", action="store_true", help="random rooms with a bathroom (door_scene_sim --partition)")
     ap.add_argument("--corridor", action="store_true", help="corridors (door_scene_sim --corridor)")
+    ap.add_argument("--depth-model", default=None, choices=["default", "structured", "tof", "stereo"],
+                    help="RGB-D depth error of a camera family (door_scene_sim --depth-model)")
+    ap.add_argument("--robot-camera", action="store_true", help="RGB-D pose as robots carry it (door_scene_sim --robot-camera)")
     ap.add_argument("--up", default=None)
     ap.add_argument("--config", default=None, help="parameters YAML passed to door_state_cli")
     ap.add_argument("--jobs", type=int, default=2)
@@ -72,6 +78,8 @@ def main():
     args = ap.parse_args()
     if args.sensor != "tls" and (args.beyond_doors or args.viewpoints != 1 or args.merge or args.mesh_like):
         ap.error("--beyond-doors, --viewpoints, --merge and --mesh-like are for --sensor tls")
+    if args.sensor != "rgbd" and (args.depth_model or args.robot_camera):
+        ap.error("--depth-model and --robot-camera are for --sensor rgbd")
     out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="dsr_sweep_"))
     out.mkdir(parents=True, exist_ok=True)
     seeds = range(args.first_seed, args.first_seed + args.scenes)
@@ -99,6 +107,8 @@ def main():
                                      "angle_mae_deg", "angle_mae_measured_deg",
                                      "angle_lower_bounds", "hinge_error_median_m"]}
     summary.update(sensor=args.sensor, first_seed=args.first_seed)
+    if args.sensor == "rgbd":
+        summary.update(depth_model=args.depth_model or "default", robot_camera=args.robot_camera)
     if args.sensor == "tls":
         summary.update(points=args.points, viewpoints=args.viewpoints, beyond_doors=args.beyond_doors,
                        merge=args.merge, mesh_like=args.mesh_like)

@@ -27,6 +27,10 @@ frame map with VIEWPOINT 0 0 0; the CLI gets that one file), mesh40k-SEED
 -partition- or -corridor- before the seed give the random rooms those options
 (e.g. merged3-400k-clutter-SEED, tls-400k-clutter-SEED). EVAL_SCENES=N runs N
 scenes per sweep instead of 30.
+RGB-D camera families (not in the default list): rgbd-structured-SEED,
+rgbd-tof-SEED, rgbd-stereo-SEED (door_scene_sim --depth-model), and
+-robot- before the seed (rgbd-tof-robot-SEED, rgbd-robot-SEED: the camera's
+pose as robots carry it, --robot-camera).
 """
 import json, os, shutil, subprocess, sys, tempfile
 from pathlib import Path
@@ -52,6 +56,8 @@ def sweep_args(name, config_dir):
     seed = parts[-1]
     if parts[0] == "rgbd":
         args = ["--sensor", "rgbd", "--first-seed", seed]
+        args += next((["--depth-model", m] for m in ("structured", "tof", "stereo") if m in parts), [])
+        args += ["--robot-camera"] if "robot" in parts else []
     elif parts[0] in ("merged2", "merged3"):  # stations merged into one cloud: the rays in total
         args = ["--sensor", "tls", "--viewpoints", parts[0][-1], "--merge", "--points", str(RAYS[parts[1]]),
                 "--first-seed", seed]

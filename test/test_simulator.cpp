@@ -292,6 +292,243 @@ TEST(Simulator, DepthNoiseGrowsWithRange) {
   EXPECT_LT(far_rms, 0.0012 + 0.0019 * std::pow(4.5 - 0.4, 2));
 }
 
+// ----------------------------------------------------------------- camera families
+
+namespace {
+
+// A frame of room `seed` under `model`, looking at door `door` (-1: the
+// seed's) from `dist` m (0: drawn).
+SimulatedCloud familyFrame(std::uint64_t seed, DepthModel model, bool noise = true, double dark_fraction = 0.35,
+                           double dist = 0, int door = 0) {
+  const Scene s = buildScene(randomRoom(seed));
+  RgbdOptions o;
+  o.seed = seed;
+  o.depth_model = model;
+  o.noise = noise;
+  o.dropout = 0;
+  o.dark_fraction = dark_fraction;
+  o.target_door = door;
+  if (model == DepthModel::TimeOfFlight) o.max_range = 10;
+  if (model == DepthModel::ActiveStereo) o.max_range = 8;
+  if (dist > 0) o.door_distance = dist;
+  return captureRgbd(s, o);
+}
+
+std::size_t countLabel(const SimulatedCloud& c, Surface s) {
+  std::size_t n = 0;
+  for (const auto& p : c.cloud)
+    n += std::isfinite(p.z) && p.label == static_cast<std::uint32_t>(s);
+  return n;
+}
+
+}  // namespace
+
+TEST(CameraFamilies, StructuredLightDepthComesInDisparityStepsThatGrowWithRangeSquared) {
+  // Kinect v1: z = f b / d with d in 1/8 px (f 580 px, b 7.5 cm): every depth
+  // is such a step, and neighbouring values are z^2 q / (f b) apart.
+  const double fb = 580.0 * 0.075, q = 1.0 / 8;
+  for (std::uint64_t seed : {1000ull, 1004ull}) {
+    SCOPED_TRACE(seedTrace(seed));
+    // A frame 1.3 m from the door, and one 4 m from it.
+    std::vector<double> near, far;
+    for (const double dist : {1.3, 4.0}) {
+      const SimulatedCloud c = familyFrame(seed, DepthModel::StructuredLight, true, 0.35, dist, -1);
+      for (const auto& p : c.cloud) {
+        if (!std::isfinite(p.z)) continue;
+        const double steps = fb / p.z / q;
+        ASSERT_NEAR(steps, std::round(steps), 1e-3) << "z=" << p.z;
+        if (dist < 2 && p.z > 1.2 && p.z < 1.6) near.push_back(p.z);
+        if (dist > 2 && p.z > 3.8 && p.z < 4.3) far.push_back(p.z);
+      }
+    }
+    ASSERT_GT(near.size(), 500u);
+    ASSERT_GT(far.size(), 500u);
+    auto smallestGap = [](std::vector<double> v) {
+      std::sort(v.begin(), v.end());
+      v.erase(std::unique(v.begin(), v.end(), [](double a, double b) { return std::abs(a - b) < 1e-5; }), v.end());
+      double g = 1e9;
+      for (std::size_t i = 1; i < v.size(); ++i) g = std::min(g, v[i] - v[i - 1]);
+      return g;
+    };
+    const double g_near = smallestGap(near), g_far = smallestGap(far);
+    EXPECT_NEAR(g_near, 1.2 * 1.2 * q / fb, 0.25 * 1.2 * 1.2 * q / fb);  // ~4 mm at 1.2 m
+    EXPECT_GT(g_far, 3.8 * 3.8 * q / fb * 0.9);                             // >= 4 cm at 3.8 m
+    EXPECT_GT(g_far, 6 * g_near);
+  }
+}
+
+TEST(CameraFamilies, TimeOfFlightSmearsDepthEdgesIntoFlyingPixels) {
+  // Where a leaf or a jamb stands before a farther surface, a pixel's
+  // footprint sees both: its depth lies in the gap between its neighbours,
+  // away from either. A camera measuring the centre ray alone has (almost)
+  // none such.
+  for (std::uint64_t seed : {1001ull, 1010ull, 1013ull}) {
+    SCOPED_TRACE(seedTrace(seed));
+    auto flying = [](const SimulatedCloud& c) {
+      std::size_t n = 0;
+      const int W = c.cloud.width, H = c.cloud.height;
+      for (int v = 1; v + 1 < H; ++v)
+        for (int u = 1; u + 1 < W; ++u) {
+          const double z = c.cloud.at(u, v).z, a = c.cloud.at(u - 1, v).z, b = c.cloud.at(u + 1, v).z;
+          if (!std::isfinite(z) || !std::isfinite(a) || !std::isfinite(b)) continue;
+          const double lo = std::min(a, b), hi = std::max(a, b);
+          n += hi - lo > 0.5 && z > lo + 0.1 && z < hi - 0.1;
+        }
+      return n;
+    };
+    const SimulatedCloud tof = familyFrame(seed, DepthModel::TimeOfFlight, false);
+    const Scene s = buildScene(randomRoom(seed));
+    RgbdOptions o;
+    o.seed = seed;
+    o.noise = false;
+    o.dropout = 0;
+    o.target_door = 0;
+    o.max_range = 10;
+    const SimulatedCloud centre = captureRgbd(s, o);
+    const std::size_t n_tof = flying(tof), n_centre = flying(centre);
+    EXPECT_GT(n_tof, 40u);
+    EXPECT_LT(n_centre * 10, n_tof) << n_centre << " vs " << n_tof;
+    // Range beyond the structured-light camera's 4.5 m, as far as 10 m.
+    double z_max = 0;
+    for (const auto& p : tof.cloud)
+      if (std::isfinite(p.z)) z_max = std::max<double>(z_max, p.z);
+    EXPECT_LE(z_max, 10.0 * 1.05);
+  }
+}
+
+TEST(CameraFamilies, TimeOfFlightMeasuresFartherInConcaveCorners) {
+  // Multipath: near the floor's junction with the wall the depth is biased
+  // away from the camera by a few cm; in the middle of the wall not.
+  const std::uint64_t seed = 1002;
+  SCOPED_TRACE(seedTrace(seed));
+  const SimulatedCloud tof = familyFrame(seed, DepthModel::TimeOfFlight, false);
+  const Scene s = buildScene(randomRoom(seed));
+  double corner = 0, middle = 0;
+  std::size_t nc = 0, nm = 0;
+  for (const auto& p : tof.cloud) {
+    if (!std::isfinite(p.z) || p.label != static_cast<std::uint32_t>(Surface::Wall)) continue;
+    const Eigen::Vector3d pc(p.x, p.y, p.z), pw = tof.sensor_to_world * pc;
+    // The true range along the ray: cast it again.
+    const Eigen::Vector3d o = tof.sensor_to_world.translation(), dir = (pw - o).normalized();
+    const RayHit h = castRay(s, o, dir, 20);
+    if (!h.hit || h.surface != Surface::Wall) continue;
+    const double bias = (pw - o).norm() - h.t;
+    if (pw.z() < 0.04) corner += bias, ++nc;
+    if (pw.z() > 1.0 && pw.z() < 1.4) middle += bias, ++nm;
+  }
+  ASSERT_GT(nc, 20u);
+  ASSERT_GT(nm, 200u);
+  EXPECT_GT(corner / nc, 0.015);
+  EXPECT_LT(std::abs(middle / nm), 0.005);
+}
+
+TEST(CameraFamilies, ActiveStereoErrorGrowsWithRangeSquared) {
+  // RMS error = z^2 subpixel / (f b): the robust spread of depth errors at
+  // 3.5-4.5 m is (4/1.5)^2 ~ 7 times that at 1-2 m.
+  const std::uint64_t seed = 1005;
+  SCOPED_TRACE(seedTrace(seed));
+  std::vector<double> rel[2];  // error / z^2
+  std::vector<double> err[2];
+  for (const double dist : {1.4, 4.0}) {  // the door 1.4 m and 4 m away
+    const SimulatedCloud noisy = familyFrame(seed, DepthModel::ActiveStereo, true, 0.0, dist, -1);
+    const SimulatedCloud clean = familyFrame(seed, DepthModel::ActiveStereo, false, 0.0, dist, -1);
+    for (std::size_t i = 0; i < clean.cloud.size(); ++i) {
+    const double z = clean.cloud[i].z, zn = noisy.cloud[i].z;
+    if (!std::isfinite(z) || !std::isfinite(zn)) continue;
+    const int b = z >= 1.0 && z < 2.0 ? 0 : (z >= 3.5 && z < 4.5 ? 1 : -1);
+    if (b < 0) continue;
+    err[b].push_back(zn - z);
+    rel[b].push_back((zn - z) / (z * z));
+    }
+  }
+  auto robustSigma = [](std::vector<double> v) {
+    for (double& x : v) x = std::abs(x);
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return 1.4826 * v[v.size() / 2];
+  };
+  ASSERT_GT(err[0].size(), 2000u);
+  ASSERT_GT(err[1].size(), 2000u);
+  const double s_near = robustSigma(err[0]), s_far = robustSigma(err[1]);
+  EXPECT_GT(s_far / s_near, 4.0);
+  // z^2-normalised, both ranges give the same spread, near 0.08 px / (f b).
+  const double k_near = robustSigma(rel[0]), k_far = robustSigma(rel[1]), k = 0.08 / (525.0 * 0.05);
+  EXPECT_NEAR(k_near / k_far, 1.0, 0.3);
+  EXPECT_NEAR(k_far, k, 0.4 * k);
+}
+
+TEST(CameraFamilies, DarkLeavesLoseTheirReturnsToStereoAndStructuredLight) {
+  // The same frames with every leaf and furniture piece dark, and none:
+  // dark leaves keep under 70% of their returns, walls keep all of theirs.
+  for (const DepthModel m : {DepthModel::ActiveStereo, DepthModel::StructuredLight})
+    for (std::uint64_t seed : {1003ull, 1017ull}) {
+      SCOPED_TRACE(seedTrace(seed) + " model=" + toString(m));
+      const SimulatedCloud dark = familyFrame(seed, m, true, 1.0), light = familyFrame(seed, m, true, 0.0);
+      const std::size_t leaf_dark = countLabel(dark, Surface::Leaf), leaf_light = countLabel(light, Surface::Leaf);
+      ASSERT_GT(leaf_light, 2000u);
+      EXPECT_LT(leaf_dark, 0.7 * leaf_light);
+      EXPECT_EQ(countLabel(dark, Surface::Wall), countLabel(light, Surface::Wall));
+    }
+}
+
+TEST(CameraFamilies, TriangulatingCamerasLoseTheShadowOfTheirBaselineBesideDepthEdges) {
+  // No structured-light return where the projector, 7.5 cm to the camera's
+  // right, cannot light the point: pixels just left of a foreground edge.
+  const std::uint64_t seed = 1001;
+  SCOPED_TRACE(seedTrace(seed));
+  const SimulatedCloud sl = familyFrame(seed, DepthModel::StructuredLight, false, 0.0);
+  const SimulatedCloud tof = familyFrame(seed, DepthModel::TimeOfFlight, false, 0.0);
+  std::size_t missing_sl = 0, missing_tof = 0;
+  for (std::size_t i = 0; i < sl.cloud.size(); ++i) {
+    missing_sl += !std::isfinite(sl.cloud[i].z) && std::isfinite(tof.cloud[i].z) && tof.cloud[i].z < 4.4;
+    missing_tof += std::isfinite(sl.cloud[i].z) && !std::isfinite(tof.cloud[i].z);
+  }
+  EXPECT_GT(missing_sl, 200u);
+  EXPECT_LT(missing_tof, missing_sl / 10);
+}
+
+TEST(CameraFamilies, PoseOptionsAreHonouredAndRobotPosesStayInTheirRanges) {
+  const Scene s = buildScene(randomRoom(1007));
+  RgbdOptions o;
+  o.seed = 1007;
+  o.camera_height = 0.35;
+  o.pitch_deg = 8.0;
+  o.roll_deg = -4.0;
+  o.door_distance = 2.0;
+  o.target_door = 0;
+  const SimulatedCloud c = captureRgbd(s, o);
+  const Eigen::Matrix3d R = c.sensor_to_world.linear();
+  EXPECT_NEAR(c.sensor_to_world.translation().z(), 0.35, 1e-9);
+  EXPECT_NEAR(std::asin(R.col(2).z()) * 180 / M_PI, 8.0, 1e-6);
+  // Roll: the image's x axis tilts out of the horizontal by the roll.
+  EXPECT_NEAR(std::abs(std::asin(R.col(0).z())) * 180 / M_PI, 4.0, 0.1);
+  const DoorTruth& d = s.doors[0];
+  const Eigen::Vector3d face = d.opening_center + s.walls[d.wall].normal * (s.spec.wall_thickness / 2);
+  EXPECT_NEAR((c.sensor_to_world.translation() - face).dot(s.walls[d.wall].normal), 2.0, 1e-9);
+  EXPECT_THROW(
+      {
+        RgbdOptions bad;
+        bad.pitch_deg = 80;
+        captureRgbd(s, bad);
+      },
+      std::invalid_argument);
+  for (std::uint64_t seed = 1000; seed < 1020; ++seed) {
+    SCOPED_TRACE(seedTrace(seed));
+    const Scene sc = buildScene(randomRoom(seed));
+    RgbdOptions r;
+    r.seed = seed;
+    r.robot_camera = true;
+    r.depth_model = DepthModel::TimeOfFlight;
+    const SimulatedCloud f = captureRgbd(sc, r);
+    const Eigen::Matrix3d Rf = f.sensor_to_world.linear();
+    const double h = f.sensor_to_world.translation().z(), pitch = std::asin(Rf.col(2).z()) * 180 / M_PI;
+    EXPECT_GE(h, 0.3);
+    EXPECT_LE(h, 1.6);
+    EXPECT_GE(pitch, -20.0 - 1e-9);
+    EXPECT_LE(pitch, 10.0 + 1e-9);
+    EXPECT_LE(std::abs(std::asin(Rf.col(0).z())) * 180 / M_PI, 5.0 + 1e-6);
+  }
+}
+
 TEST(Simulator, RandomRoomsBuildAndHoldWhatTheyPromise) {
   for (std::uint64_t seed = 100; seed < 160; ++seed) {
     SCOPED_TRACE(seedTrace(seed));

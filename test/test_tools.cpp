@@ -63,6 +63,10 @@ TEST(Tools, HelpExitsZeroAndWrongArgumentsExitTwo) {
   EXPECT_EQ(run("door_scene_sim --out /tmp/x --sensor sonar").code, 2);       // unknown sensor
   EXPECT_EQ(run("door_scene_sim --out /tmp/x --scene atlantis").code, 2);     // unknown scene
   EXPECT_EQ(run("door_scene_sim --out /tmp/x --angle 270").code, 2);          // out of range
+  EXPECT_EQ(run("door_scene_sim --out /tmp/x --sensor rgbd --depth-model sonar").code, 2);  // unknown family
+  EXPECT_EQ(run("door_scene_sim --out /tmp/x --depth-model tof").code, 2);    // a camera's option for the scanner
+  EXPECT_EQ(run("door_scene_sim --out /tmp/x --sensor rgbd --pitch 90").code, 2);  // out of range
+  EXPECT_EQ(run("door_scene_sim --out /tmp/x --sensor rgbd --resolution 1x1").code, 2);
   EXPECT_EQ(run("door_state_eval only_one.json").code, 2);
   EXPECT_EQ(run("door_state_cli").code, 2);                                   // no INPUT
   EXPECT_EQ(run("door_state_cli a.pcd b.pcd").code, 2);                       // two stations, neither there

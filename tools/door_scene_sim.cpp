@@ -4,6 +4,7 @@
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cmath>
@@ -58,6 +59,22 @@ options:
   --zeros                LiDAR: (0, 0, 0) instead of NaN where no return
   --mount-height M       LiDAR head (0.4-1.2 m) or, with --drive, camera (0.3-1.5 m)
                          height above the floor (default: drawn by the seed)
+  --dropout P            probability of a lost return (default TLS 0, RGB-D 0.02)
+  --depth-model M        RGB-D depth error of a camera family (src/sim/depth_models.cpp):
+                         default (Kinect-like axial noise, as before), structured
+                         (Kinect v1-like: 1/8 px disparity steps, projector shadows,
+                         holes on dark surfaces), tof (flying pixels, multipath in
+                         corners, range to 10 m), stereo (D435-like: RMS ~ z^2,
+                         speckle, holes on dark/glossy leaves)
+  --resolution WxH       RGB-D image 640x480 (default) or 320x240 (intrinsics scaled)
+  --camera-height M      RGB-D camera height above the floor, 0.1-3 m (default: drawn 0.9-1.5)
+  --pitch DEG            RGB-D optical axis above the horizontal, -60..60 (default: at the
+                         door and below the ceiling); with it the ceiling may be in view
+  --roll DEG             RGB-D roll, -30..30 (default: drawn within 3 deg)
+  --door-distance M      RGB-D camera this far in front of the door (default: drawn 1.6-3.5)
+  --robot-camera         RGB-D pose as robots carry cameras, drawn by the seed: height
+                         0.3-1.6 m, pitch -20..+10 deg, roll within 5 deg, 1-6 m from the
+                         door; the options above win
   --doors MIN:MAX        number of doors of a random room (default 1:3)
   --angle DEG            opening angle of every door, 0..180 (default: random)
   --max-angle DEG        largest random opening angle (default 130)
@@ -101,7 +118,7 @@ drive (--drive; --sensor lidar16|lidar32|lidar64|lidar128|rgbd, default lidar64;
   --rate HZ              clouds per second (default 10 LiDAR, 15 RGB-D)
   --toggle-door K:ANGLE@T  door K is at ANGLE deg from T s after the start on
                          (repeatable)
-  --door-distance M      pass the doors this far from their wall, 1-3 m (default 1.4)
+  --pass-distance M      pass the doors this far from their wall, 1-3 m (default 1.4)
   --no-through-door      stay in the room
   --lidar-motion         LiDAR: the robot moves during each sweep (1 / rate long,
                          ending at the cloud's stamp); clouds not deskewed
@@ -147,11 +164,12 @@ int main(int argc, char** argv) {
   sim::DriveOptions drive_options;
   std::string rgbd_size;
   std::string drive_flag;  // a drive-only flag given
+  bool depth_model_given = false, rgbd_option = false;
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
       auto value = [&] { return dsr::tools::nextValue(argc, argv, i); };
-      if (a == "--drive-seconds" || a == "--rate" || a == "--toggle-door" || a == "--door-distance" ||
+      if (a == "--drive-seconds" || a == "--rate" || a == "--toggle-door" || a == "--pass-distance" ||
           a == "--no-through-door" || a == "--camera-pitch" || a == "--rgbd-size" || a == "--lidar-motion")
         drive_flag = a;
       if (a == "-h" || a == "--help") {
@@ -189,6 +207,43 @@ int main(int argc, char** argv) {
         if (p < 0 || p >= 1) throw UsageError("--dropout must lie in [0, 1)");
         tls.dropout = rgbd.dropout = p;
         lidar_dropout = p;
+      } else if (a == "--depth-model") {
+        const std::string m = value();
+        try {
+          rgbd.depth_model = sim::parseDepthModel(m);
+        } catch (const std::invalid_argument& e) {
+          throw UsageError(std::string("--depth-model: ") + e.what());
+        }
+        depth_model_given = true;
+      } else if (a == "--resolution") {
+        const std::string r = value();
+        if (r != "640x480" && r != "320x240") throw UsageError("--resolution must be 640x480 or 320x240");
+        const double scale = r == "320x240" ? 0.5 : 1.0;
+        rgbd.width = static_cast<int>(640 * scale);
+        rgbd.height = static_cast<int>(480 * scale);
+        rgbd.fx = rgbd.fy = 525.0 * scale;
+        rgbd.cx = (rgbd.width - 1) / 2.0;
+        rgbd.cy = (rgbd.height - 1) / 2.0;
+        rgbd_option = true;
+      } else if (a == "--camera-height") {
+        rgbd.camera_height = toDouble(a, value());
+        if (*rgbd.camera_height < 0.1 || *rgbd.camera_height > 3) throw UsageError("--camera-height must lie in [0.1, 3] m");
+        rgbd_option = true;
+      } else if (a == "--pitch") {
+        rgbd.pitch_deg = toDouble(a, value());
+        if (std::abs(*rgbd.pitch_deg) > 60) throw UsageError("--pitch must lie in [-60, 60] deg");
+        rgbd_option = true;
+      } else if (a == "--roll") {
+        rgbd.roll_deg = toDouble(a, value());
+        if (std::abs(*rgbd.roll_deg) > 30) throw UsageError("--roll must lie in [-30, 30] deg");
+        rgbd_option = true;
+      } else if (a == "--door-distance") {
+        rgbd.door_distance = toDouble(a, value());
+        if (*rgbd.door_distance < 0.5 || *rgbd.door_distance > 50) throw UsageError("--door-distance must lie in [0.5, 50] m");
+        rgbd_option = true;
+      } else if (a == "--robot-camera") {
+        rgbd.robot_camera = true;
+        rgbd_option = true;
       } else if (a == "--doors") std::tie(random_options.min_doors, random_options.max_doors) = toRange(a, value());
       else if (a == "--decoys") std::tie(random_options.min_decoys, random_options.max_decoys) = toRange(a, value());
       else if (a == "--angle") {
@@ -230,9 +285,9 @@ int main(int argc, char** argv) {
         if (c.door < 0 || c.angle_deg < 0 || c.angle_deg > 180 || c.t < 0)
           throw UsageError("--toggle-door needs K >= 0, ANGLE in [0, 180] and T >= 0");
         drive_options.changes.push_back(c);
-      } else if (a == "--door-distance") {
+      } else if (a == "--pass-distance") {
         drive_options.door_distance = toDouble(a, value());
-        if (drive_options.door_distance < 1 || drive_options.door_distance > 3) throw UsageError("--door-distance must lie in [1, 3] m");
+        if (drive_options.door_distance < 1 || drive_options.door_distance > 3) throw UsageError("--pass-distance must lie in [1, 3] m");
       } else if (a == "--no-through-door") drive_options.through_door = false;
       else if (a == "--lidar-motion") drive_options.lidar_motion = true;
       else if (a == "--camera-pitch") {
@@ -258,6 +313,12 @@ int main(int argc, char** argv) {
       if (camera ? (*mount_height < 0.3 || *mount_height > 1.5) : (*mount_height < 0.4 || *mount_height > 1.2))
         throw UsageError(camera ? "--mount-height must lie in [0.3, 1.5] m for a camera" : "--mount-height must lie in [0.4, 1.2] m for a LiDAR");
     }
+    if (sensor != "rgbd" && (depth_model_given || rgbd_option))
+      throw UsageError("--depth-model, --resolution and the camera pose options are for --sensor rgbd");
+    // Each family's reach: time of flight to 10 m, active stereo to 8 m (its
+    // error then ~20 cm), structured light as the default, 4.5 m.
+    if (rgbd.depth_model == sim::DepthModel::TimeOfFlight) rgbd.max_range = 10.0;
+    if (rgbd.depth_model == sim::DepthModel::ActiveStereo) rgbd.max_range = 8.0;
     if (bag.count < 1 || bag.count > 10000 || !(bag.rate_hz > 0 && bag.rate_hz <= 1000))
       throw UsageError("--bag-count must lie in [1, 10000] and --bag-rate in (0, 1000]");
     if (bag.fixed_frame.empty()) throw UsageError("--fixed-frame must not be empty");
@@ -393,6 +454,12 @@ int main(int argc, char** argv) {
                 << " furniture piece(s); " << sensor << " cloud of " << cloud.cloud.size() << " points in frame "
                 << cloud.frame_id << " simulated in " << static_cast<int>(ms) << " ms\n";
       if (mesh_vertices > 0) std::cerr << "  mesh-like: median vertex spacing " << sim::medianSpacing(cloud.cloud) << " m\n";
+      if (sensor == "rgbd") {
+        const Eigen::Vector3d cam = cloud.sensor_to_world.translation(), f = cloud.sensor_to_world.linear().col(2);
+        std::cerr << "  camera: depth model " << sim::toString(rgbd.depth_model) << ", " << rgbd.width << "x"
+                  << rgbd.height << ", height " << cam.z() - scene.floor_z << " m, pitch "
+                  << std::asin(std::max(-1.0, std::min(1.0, f.z()))) * 180 / M_PI << " deg\n";
+      }
       for (std::size_t i = 0; i < scene.doors.size(); ++i) {
         const auto& d = scene.doors[i];
         std::cerr << "  door " << i << ": " << d.state() << " at " << d.angle_deg << " deg, width " << d.width

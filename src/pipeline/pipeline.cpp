@@ -1,5 +1,6 @@
 #include "door_state_recognition/pipeline/pipeline.hpp"
 #include "door_state_recognition/pipeline/stopwatch.hpp"
+#include "door_state_recognition/pipeline/input_checks.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -91,6 +92,11 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   res.points_in = cloud.size();
   res.viewpoint = viewpoint_in;
   const bool organized = cloud.height > 1;  // a camera frame: no return means nothing in range
+  if (const std::optional<std::string> why = implausibleInput(cloud, viewpoint_in)) {
+    res.warnings.push_back(*why);
+    watch.total();
+    return res;
+  }
 
   // --- preprocess: sanitise, downsample ---------------------------------------
   preprocess::Points thinned;
@@ -142,13 +148,19 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
         error.run([&] { no_return = preprocess::noReturnRays(cloud, viewpoint_in.cast<float>()); });
       }
       error.run([&] {
+        // One levelling path: an axis given and one estimated seed the same
+        // refinement, so that both give the same doors when they agree.
+        // Sensors are mounted upright or on a side (a camera's -y, a
+        // scanner's +z): an estimate within the refinement's reach of one of
+        // the frame's axes is refined from that axis, as if it were given.
         std::optional<Eigen::Vector3d> up = preprocess::parseUpAxis(p.up_axis);
-        if (!up) {
+        const bool given = up.has_value();
+        const double reach = p.refine_up_deg > 0 ? p.refine_up_deg : 10.0;
+        if (!given) {
           up = preprocess::estimateUp(thinned, normals.n, static_cast<unsigned>(p.random_seed));
-          if (up) up = preprocess::refineUp(*up, normals.n, 10.0);
-        } else if (p.refine_up_deg > 0) {
-          up = preprocess::refineUp(*up, normals.n, p.refine_up_deg);
+          if (up) up = preprocess::nearestFrameAxis(*up, reach);
         }
+        if (up && (!given || p.refine_up_deg > 0)) up = preprocess::refineUp(*up, normals.n, reach);
         if (!up) {
           res.warnings.push_back("up axis could not be estimated; using +z");
           up = Eigen::Vector3d::UnitZ();
@@ -189,6 +201,8 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   }
   res.floor = fc.floor;
   res.ceiling = fc.ceiling;
+  if (const std::optional<std::string> why = singleSurface(pts, normals.n, viewpoint, p.up_axis != "auto"))
+    res.warnings.push_back(*why);
   if (vertical_z.size() < 20) {
     res.warnings.push_back("no vertical structure: no walls");
     watch.total();

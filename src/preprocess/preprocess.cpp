@@ -601,5 +601,13 @@ Eigen::Vector3d refineUp(const Eigen::Vector3d& up_in, const Points& normals, do
   return v.dot(up) >= cos_max ? v : up;
 }
 
+Eigen::Vector3d nearestFrameAxis(const Eigen::Vector3d& dir, double max_deg) {
+  const Eigen::Vector3d d = dir.normalized();
+  Eigen::Index k = 0;
+  d.cwiseAbs().maxCoeff(&k);
+  const Eigen::Vector3d axis = Eigen::Vector3d::Unit(k) * (d[k] > 0 ? 1.0 : -1.0);
+  return d.dot(axis) >= std::cos(max_deg * M_PI / 180.0) ? axis : d;
+}
+
 }  // namespace preprocess
 }  // namespace dsr

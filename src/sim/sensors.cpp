@@ -1,5 +1,7 @@
 #include "door_state_recognition/sim/sensors.hpp"
 
+#include "depth_models.hpp"
+
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -17,12 +19,13 @@ struct PreparedBox {
   Eigen::Matrix3d Rt;
   Eigen::Vector3d c, half;
   Surface surface;
+  int owner;
 };
 
 std::vector<PreparedBox> prepare(const Scene& scene) {
   std::vector<PreparedBox> out;
   out.reserve(scene.boxes.size());
-  for (const Box& b : scene.boxes) out.push_back({b.pose.linear().transpose(), b.pose.translation(), b.half, b.surface});
+  for (const Box& b : scene.boxes) out.push_back({b.pose.linear().transpose(), b.pose.translation(), b.half, b.surface, b.owner});
   return out;
 }
 
@@ -59,6 +62,7 @@ RayHit cast(const std::vector<PreparedBox>& boxes, const Eigen::Vector3d& o, con
     best.hit = true;
     best.t = t0;
     best.surface = b.surface;
+    best.owner = b.owner;
     best.normal = b.Rt.row(axis).transpose() * sign;
   }
   return best;
@@ -184,8 +188,15 @@ SimulatedCloud captureRgbd(const Scene& scene, const RgbdOptions& o) {
   RayRandom rnd(o.seed, 0xCAFE, 0);
   const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
 
+  requireOption(!o.camera_height || (*o.camera_height >= 0.1 && *o.camera_height <= 3.0), "camera height must lie in [0.1, 3] m");
+  requireOption(!o.pitch_deg || std::abs(*o.pitch_deg) <= 60, "pitch must lie in [-60, 60] deg");
+  requireOption(!o.roll_deg || std::abs(*o.roll_deg) <= 30, "roll must lie in [-30, 30] deg");
+  requireOption(!o.door_distance || (*o.door_distance >= 0.5 && *o.door_distance <= 50), "door distance must lie in [0.5, 50] m");
+  requireOption(o.dark_fraction >= 0 && o.dark_fraction <= 1, "dark fraction must lie in [0, 1]");
+
   // Place the camera in front of a door, looking at it.
   Eigen::Vector3d cam, target;
+  double robot_pitch = 0, robot_roll = 0;
   if (o.camera_to_world) {  // placed by the caller
     cam = o.camera_to_world->translation();
     target = cam + o.camera_to_world->linear().col(2);
@@ -201,16 +212,31 @@ SimulatedCloud captureRgbd(const Scene& scene, const RgbdOptions& o) {
     const double room_depth = (door.wall % 2 == 0) ? scene.spec.depth : scene.spec.width;
     bool placed = false;
     for (int attempt = 0; attempt < 2000 && !placed; ++attempt) {
-      const double dist = 1.6 + (std::min(3.5, room_depth - 0.4) - 1.6) * rnd.uniform();
+      double dist = 1.6 + (std::min(3.5, room_depth - 0.4) - 1.6) * rnd.uniform();
       const double lateral = (rnd.uniform() - 0.5) * 1.6;
-      cam = face_center + wall.normal * dist + wall.axis * lateral + up * (0.9 + 0.6 * rnd.uniform());
-      placed = scene.isFree(cam, 0.3);
+      double height = 0.9 + 0.6 * rnd.uniform();
+      if (o.robot_camera) {  // its own stream: the draws above stay as they were
+        RayRandom pose(o.seed, 0x20B07, attempt);
+        height = 0.3 + 1.3 * pose.uniform();
+        dist = 1.0 + (std::max(1.0, std::min(6.0, room_depth - 0.4)) - 1.0) * pose.uniform();
+        robot_pitch = (-20.0 + 30.0 * pose.uniform()) * kPi / 180;
+        robot_roll = (pose.uniform() - 0.5) * 10.0 * kPi / 180;
+      }
+      if (o.door_distance) dist = *o.door_distance;
+      if (o.camera_height) height = *o.camera_height;
+      cam = face_center + wall.normal * dist + wall.axis * lateral + up * (scene.floor_z + height);
+      placed = scene.isFree(cam, std::min(0.3, height - 0.02));
     }
     if (!placed) throw std::invalid_argument("sensor: no free camera position in front of door " + std::to_string(di));
     target = face_center + wall.axis * ((rnd.uniform() - 0.5) * 0.6) + up * (0.8 + 0.5 * rnd.uniform());
   }
   Eigen::Vector3d f = (target - cam).normalized();
-  if (o.avoid_ceiling && !o.camera_to_world) {
+  const std::optional<double> pitch_given =
+      o.pitch_deg ? std::optional<double>(*o.pitch_deg * kPi / 180) : o.robot_camera ? std::optional<double>(robot_pitch) : std::nullopt;
+  if (pitch_given && !o.camera_to_world) {
+    const Eigen::Vector3d flat = Eigen::Vector3d(f.x(), f.y(), 0).normalized();
+    f = (flat * std::cos(*pitch_given) + up * std::sin(*pitch_given)).normalized();
+  } else if (o.avoid_ceiling && !o.camera_to_world) {
     // Lower the pitch until the top image row meets the far wall below the ceiling.
     const double horiz = std::hypot(f.x(), f.y());
     double pitch = std::atan2(f.z(), horiz);
@@ -223,7 +249,9 @@ SimulatedCloud captureRgbd(const Scene& scene, const RgbdOptions& o) {
       f = (flat * std::cos(pitch) + up * std::sin(pitch)).normalized();
     }
   }
-  const double roll = (rnd.uniform() - 0.5) * 6.0 * kPi / 180;
+  double roll = (rnd.uniform() - 0.5) * 6.0 * kPi / 180;
+  if (o.robot_camera) roll = robot_roll;
+  if (o.roll_deg) roll = *o.roll_deg * kPi / 180;
   Eigen::Vector3d x = f.cross(up).normalized(), y = f.cross(x);
   const Eigen::AngleAxisd R_roll(roll, f);
   x = R_roll * x;
@@ -236,6 +264,14 @@ SimulatedCloud captureRgbd(const Scene& scene, const RgbdOptions& o) {
   out.viewpoints_world.push_back(cam);
 
   const std::vector<PreparedBox> boxes = prepare(scene);
+  if (o.depth_model != DepthModel::Default) {
+    detail::renderDepthModel(scene, o, out.sensor_to_world,
+                             [&boxes](const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double max_t) {
+                               return cast(boxes, origin, dir, max_t);
+                             },
+                             out.cloud);
+    return out;
+  }
   out.cloud.width = o.width;
   out.cloud.height = o.height;
   out.cloud.is_dense = false;

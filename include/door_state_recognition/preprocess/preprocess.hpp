@@ -53,5 +53,9 @@ std::optional<Eigen::Vector3d> estimateUp(const Points& points, const Points& no
 // the given axis when neither is seen.
 Eigen::Vector3d refineUp(const Eigen::Vector3d& up, const Points& normals, double max_deg);
 
+// The axis of the frame (+x ... -z) within max_deg of `dir`, or `dir`
+// (normalized) when none is.
+Eigen::Vector3d nearestFrameAxis(const Eigen::Vector3d& dir, double max_deg);
+
 }  // namespace preprocess
 }  // namespace dsr

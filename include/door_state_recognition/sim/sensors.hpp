@@ -27,6 +27,18 @@ struct TlsOptions {
   std::uint64_t seed = 1;
 };
 
+// The depth error model of an RGB-D camera's family (src/sim/depth_models.cpp
+// gives each its published behaviour and sources).
+enum class DepthModel {
+  Default,          // axial noise sigma(z) of a Kinect v1 (Nguyen et al. 2012), random dropout: the frames of old
+  StructuredLight,  // Kinect v1-like: disparity quantized to 1/8 px, projector shadows, holes on dark surfaces
+  TimeOfFlight,     // Kinect v2 / Azure-like: flying pixels at edges, multipath in concave corners, range to 10 m
+  ActiveStereo,     // RealSense D435-like: RMS error ~ z^2, speckle, imager shadows, holes on dark/glossy surfaces
+};
+// "default" | "structured" | "tof" | "stereo"; throws std::invalid_argument otherwise.
+DepthModel parseDepthModel(const std::string& name);
+const char* toString(DepthModel m);
+
 struct RgbdOptions {
   int width = 640, height = 480;
   double fx = 525.0, fy = 525.0, cx = 319.5, cy = 239.5;  // Kinect-like intrinsics
@@ -40,6 +52,19 @@ struct RgbdOptions {
   // placed in front of a door by the seed as above (target_door, avoid_ceiling).
   std::optional<Eigen::Isometry3d> camera_to_world;
   std::uint64_t seed = 1;
+  DepthModel depth_model = DepthModel::Default;
+  // Not the default model: the share of leaves and of furniture pieces that
+  // are dark (or glossy), drawn per piece by the seed.
+  double dark_fraction = 0.35;
+  // The camera's pose; each one unset is drawn by the seed as before (height
+  // 0.9-1.5 m, pitched at the door and below the ceiling, roll within 3 deg,
+  // 1.6-3.5 m in front of the door). pitch: of the optical axis above the
+  // horizontal; a pitch given (or robot_camera) lets the ceiling into view.
+  std::optional<double> camera_height, pitch_deg, roll_deg, door_distance;
+  // A camera as robots carry it, drawn by the seed: height 0.3-1.6 m, pitch
+  // -20..+10 deg, roll within 5 deg, 1-6 m from the door (as deep as the
+  // room allows). Options given above win.
+  bool robot_camera = false;
 };
 
 struct SimulatedCloud {
@@ -64,6 +89,7 @@ struct RayHit {
   double t = 0.0;
   Surface surface = Surface::None;
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // of the face hit, world
+  int owner = -1;  // Box::owner of the box hit
 };
 
 // Nearest hit of the ray origin + t * dir (dir unit), t in (0, max_t].

@@ -1,0 +1,114 @@
+#include "door_state_recognition/pipeline/input_checks.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <vector>
+
+namespace dsr {
+
+namespace {
+// The farthest a depth camera measures (time of flight to ~12 m, stereo to
+// ~20 m with errors of metres): a camera frame whose median range is beyond
+// it is in another unit. A terrestrial scanner reaches hundreds of metres,
+// but no room is a kilometre across.
+constexpr double kCameraMedianRangeMax = 30.0, kScanMedianRangeMax = 1000.0;
+constexpr std::size_t kSample = 20000;  // points sampled for the ranges
+}  // namespace
+
+std::optional<std::string> implausibleInput(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vector3d& viewpoint) {
+  const bool organized = cloud.height > 1;
+  const Eigen::Vector3f vp = viewpoint.cast<float>();
+  std::size_t finite = 0;
+  for (const auto& p : cloud.points) finite += std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+  if (finite < 20) return std::nullopt;  // too few points: the pipeline says so
+  const std::size_t stride = std::max<std::size_t>(1, finite / kSample);
+  std::vector<double> range;
+  range.reserve(finite / stride + 1);
+  float z_min = std::numeric_limits<float>::max(), z_max = -z_min;
+  std::size_t k = 0, at_sensor = 0;
+  for (const auto& p : cloud.points) {
+    if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) continue;
+    const double r = (p.getVector3fMap() - vp).norm();
+    at_sensor += r < 1e-3;
+    z_min = std::min(z_min, p.z);
+    z_max = std::max(z_max, p.z);
+    if (k++ % stride == 0) range.push_back(r);
+  }
+  char buf[300];
+  if (at_sensor * 100 >= finite * 99) {
+    std::snprintf(buf, sizeof buf,
+                  "%zu of %zu points lie at the sensor (depth 0 everywhere): a depth image without returns "
+                  "(0 is 'no return'); no doors",
+                  at_sensor, finite);
+    return std::string(buf);
+  }
+  if (organized && z_max - z_min <= 1e-6f * std::max(1.0f, std::abs(z_max))) {
+    std::snprintf(buf, sizeof buf,
+                  "every pixel of the frame has the same depth (%.3f m): a constant depth image, not a scene; no doors",
+                  z_max);
+    return std::string(buf);
+  }
+  std::nth_element(range.begin(), range.begin() + range.size() / 2, range.end());
+  const double median = range[range.size() / 2], limit = organized ? kCameraMedianRangeMax : kScanMedianRangeMax;
+  if (median > limit) {
+    std::snprintf(buf, sizeof buf,
+                  "median range %.0f m, beyond what a %s reaches indoors (%.0f m): depth in millimetres read as "
+                  "metres? (REP 103: metres); no doors",
+                  median, organized ? "depth camera" : "scanner", limit);
+    return std::string(buf);
+  }
+  return std::nullopt;
+}
+
+std::optional<std::string> singleSurface(const std::vector<Eigen::Vector3f>& points,
+                                         const std::vector<Eigen::Vector3f>& normals, const Eigen::Vector3f& viewpoint,
+                                         bool up_given) {
+  // The dominant direction of the normals (sign-free), and the share of
+  // points whose normal lies within 10 deg of it.
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  std::size_t n = 0;
+  for (const auto& nf : normals)
+    if (nf.norm() > 0.5f) {
+      C += nf.cast<double>() * nf.cast<double>().transpose();
+      ++n;
+    }
+  if (n < 100) return std::nullopt;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
+  const Eigen::Vector3f e = es.eigenvectors().col(2).cast<float>();
+  const float cos10 = std::cos(10.0f * 3.14159265f / 180.0f);
+  std::vector<float> offset;  // of the plane's points from the viewpoint, along e
+  for (std::size_t i = 0; i < normals.size(); ++i)
+    if (normals[i].norm() > 0.5f && std::abs(normals[i].dot(e)) > cos10) offset.push_back((points[i] - viewpoint).dot(e));
+  const double share = static_cast<double>(offset.size()) / n;
+  if (share < 0.9) return std::nullopt;
+  std::nth_element(offset.begin(), offset.begin() + offset.size() / 2, offset.end());
+  const double d = offset[offset.size() / 2];  // signed, along e
+  char buf[300];
+  if (std::abs(e.z()) > 0.9f) {
+    const double below = e.z() > 0 ? -d : d;  // the plane's depth below the viewpoint
+    std::snprintf(buf, sizeof buf, "only a %s in view (one plane holds %.0f%% of the points, %.2f m %s the sensor)%s: no walls, no doors",
+                  below > 0 ? "floor" : "ceiling", 100 * share, std::abs(below), below > 0 ? "below" : "above",
+                  up_given ? "" : ", or one surface close up levelled as a floor (the up axis was estimated from it: give the sensor's)");
+    return std::string(buf);
+  }
+  if (std::abs(e.z()) < 0.25f && std::abs(d) < 1.5) {
+    std::snprintf(buf, sizeof buf,
+                  "only one surface close up (one wall-like plane holds %.0f%% of the points, %.2f m from the sensor): "
+                  "too little of the scene to tell a doorway",
+                  100 * share, std::abs(d));
+    return std::string(buf);
+  }
+  if (std::abs(e.z()) >= 0.25f) {  // neither floor nor wall: the up axis is off
+    std::snprintf(buf, sizeof buf,
+                  "only one surface in view (one plane holds %.0f%% of the points, tilted %.0f deg from the up axis): "
+                  "no walls, no doors; is the up axis right?",
+                  100 * share, std::acos(std::min(1.0f, std::abs(e.z()))) * 180 / 3.14159265);
+    return std::string(buf);
+  }
+  return std::nullopt;
+}
+
+}  // namespace dsr
