@@ -12,11 +12,10 @@
 
 #include <cstdio>
 
-#include "door_state_recognition/sim/ground_truth.hpp"
-#include "door_state_recognition/sim/registered.hpp"
 #include "door_state_recognition/sim/drive.hpp"
 #include "door_state_recognition/sim/ground_truth.hpp"
 #include "door_state_recognition/sim/lidar.hpp"
+#include "door_state_recognition/sim/registered.hpp"
 #include "door_state_recognition/sim/scene.hpp"
 #include "door_state_recognition/sim/sensors.hpp"
 
@@ -655,29 +654,6 @@ SimulatedCloud threeStationScan(const Scene& s, std::uint64_t seed, std::size_t 
   o.viewpoints = 3;
   o.seed = seed;
   return scanTls(s, o);
-// Rotating LiDAR
-
-namespace {
-
-constexpr double kPiTest = 3.14159265358979323846;
-
-// Whether p (world) lies on the surface of some box (within tol) and inside none.
-bool onSomeSurface(const Scene& s, const Eigen::Vector3d& p, double tol) {
-  bool near = false;
-  for (const Box& b : s.boxes) {
-    if (b.contains(p, -tol)) return false;
-    near |= b.contains(p, tol);
-  }
-  return near;
-}
-
-LidarOptions exactLidar(int beams, std::uint64_t seed) {
-  LidarOptions o = LidarOptions::preset(beams);
-  o.range_sigma = 0;
-  o.dropout = 0;
-  o.max_incidence_deg = 90;
-  o.seed = seed;
-  return o;
 }
 
 }  // namespace
@@ -926,6 +902,36 @@ TEST(Clutter, OptionsAreDeterministicAndLeaveThePlainRoomAlone) {
     for (std::size_t i = 0; i < plain.doors.size(); ++i) EXPECT_EQ(cluttered.doors[i].center, plain.doors[i].center);
     EXPECT_GT(cluttered.furniture.size(), plain.furniture.size());
   }
+}
+
+// ---------------------------------------------------------------------------
+// Rotating LiDAR
+
+namespace {
+
+constexpr double kPiTest = 3.14159265358979323846;
+
+// Whether p (world) lies on the surface of some box (within tol) and inside none.
+bool onSomeSurface(const Scene& s, const Eigen::Vector3d& p, double tol) {
+  bool near = false;
+  for (const Box& b : s.boxes) {
+    if (b.contains(p, -tol)) return false;
+    near |= b.contains(p, tol);
+  }
+  return near;
+}
+
+LidarOptions exactLidar(int beams, std::uint64_t seed) {
+  LidarOptions o = LidarOptions::preset(beams);
+  o.range_sigma = 0;
+  o.dropout = 0;
+  o.max_incidence_deg = 90;
+  o.seed = seed;
+  return o;
+}
+
+}  // namespace
+
 TEST(Lidar, RingsAreRowsWithOneElevationEachAndColumnsSweepTheAzimuth) {
   for (const int beams : {16, 32, 64, 128}) {
     const std::uint64_t seed = 40 + beams;
