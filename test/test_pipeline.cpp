@@ -635,10 +635,12 @@ TEST(DoorState, RandomLaserScannedRoomsMeetTheFigures) {
   // 12 random rooms, 400k rays, 5 mm noise, 1-3 doors at 0-130 deg, cupboards
   // and wardrobes, one scan position drawn by the seed. Precision, state
   // accuracy and angle error are held at the issue's figures; recall and the
-  // hinge error at what the pipeline reaches today on these seeds (recall
-  // 22/26 = 0.85, 20/26 at 3c54082; hinge 5.5 cm): doors whose leaf the scan
-  // position cannot see are missed. The 30-scene figures come from
-  // scripts/eval_sweep.py (README).
+  // hinge error at what the pipeline reaches today on these seeds (hinge
+  // 5.5 cm). Doors whose leaf the scan position cannot see are reported
+  // NOT_CLOSED at their free-space bound (issue 20; before, 22/26 found):
+  // found, never a right state, so the state and the angle are held over the
+  // measured leaves, and no bound may exceed its true angle. The 30-scene
+  // figures come from scripts/eval_sweep.py (README).
   std::vector<eval::EvalResult> all;
   std::ostringstream log;
   for (std::uint64_t seed = 2000; seed < 2012; ++seed) {
@@ -649,10 +651,11 @@ TEST(DoorState, RandomLaserScannedRoomsMeetTheFigures) {
   const eval::EvalResult m = eval::merge(all);
   SCOPED_TRACE(log.str());
   EXPECT_GE(m.precision(), 0.95);
-  EXPECT_GE(m.stateAccuracy(), 0.95);
-  EXPECT_LE(m.angleMaeDeg(), 3.0);
+  EXPECT_GE(m.stateAccuracyMeasured(), 0.95);
+  EXPECT_LE(m.angleMaeMeasuredDeg(), 3.0);
   EXPECT_LE(m.hingeErrorMedianM(), 0.06);
-  EXPECT_GE(m.recall(), 0.84);
+  EXPECT_GE(m.recall(), 0.97);
+  EXPECT_EQ(m.bound_errors, 0);
 }
 
 TEST(DoorState, CameraFramesShowDoorsThroughNoiseAndACutView) {
@@ -858,7 +861,9 @@ TEST(DoorState, CameraFramesFindTheDoorInView) {
   // 0.92, the state right in 10 of the 11 found: 3010, open 92 deg, is
   // taken at 88); the issue asks for the state right in >= 90 % of frames:
   // reached on the 30 sweep frames 1000-1029, not on 2000-2029 nor on
-  // these 12 (README).
+  // these 12 (README). Since issue 20, 3011's leaf, swung away out of
+  // sight, is found NOT_CLOSED (never a right state): the state is held
+  // over the measured leaves.
   std::vector<eval::EvalResult> all;
   std::ostringstream log;
   for (std::uint64_t seed = 3000; seed < 3012; ++seed) {
@@ -870,7 +875,8 @@ TEST(DoorState, CameraFramesFindTheDoorInView) {
   SCOPED_TRACE(log.str());
   EXPECT_GE(m.precision(), 0.95);
   EXPECT_GE(m.recall(), 0.9);
-  EXPECT_GE(m.stateAccuracy(), 0.9);
+  EXPECT_GE(m.stateAccuracyMeasured(), 0.9);
+  EXPECT_EQ(m.bound_errors, 0);
 }
 
 TEST(DoorState, AnUnseenLeafIsReportedNotClosedAtItsBound) {
@@ -1012,7 +1018,9 @@ TEST(Stations, ADoorOutOfOneStationsSightIsMeasuredFromAnother) {
   for (const auto& d : all.doors) log << " " << toString(d.state) << "@" << d.opening_angle_deg;
   SCOPED_TRACE(log.str());
   ASSERT_EQ(e0.true_doors, 3);
-  ASSERT_TRUE(std::none_of(e0.matches.begin(), e0.matches.end(), [](const eval::DoorMatch& m) { return m.truth_index == 0; }))
+  // (The first station reports door 0 NOT_CLOSED at its free-space bound, issue 20.)
+  ASSERT_TRUE(std::none_of(e0.matches.begin(), e0.matches.end(),
+                           [](const eval::DoorMatch& m) { return m.truth_index == 0 && !m.angle_is_lower_bound; }))
       << "the scene no longer shows what this test is about: the first station sees door 0";
   EXPECT_EQ(e.matched, 3);
   EXPECT_EQ(e.reported_doors, 3);
@@ -1080,18 +1088,24 @@ TEST(Stations, ALeafSeenFromTheEdgeByOneStationIsMeasuredFromAnother) {
   // second fitted a leaf at 70 deg from the other jamb, its doorway 0.6 m
   // along the wall; the doorway-overlap rule that merged it is now shown by
   // ReportsOfOneDoorFromBothFacesOfItsWallAreOneDoor.) The survey reports
-  // door 1 once, measured. (Door 0, swung away behind its wall, is out of
-  // every station's sight: free space bounds it at 44-66 deg only.)
+  // door 1 once, measured. Door 0, swung away behind its wall, is out of
+  // every station's sight: free space bounds it at 44-66 deg only; the
+  // survey reports it NOT_CLOSED at the largest bound (issue 20).
   const std::uint64_t seed = 5023;
   const Survey sv = survey(seed, 3, 400000);
   const Pipeline pipe{Parameters()};
   const PipelineResult all = pipe.runStations(sv.stations(), false);
   const eval::EvalResult e = sv.score(all);
   SCOPED_TRACE(::testing::Message() << "seed=" << seed << " survey:" << describe(all));
-  EXPECT_EQ(e.reported_doors, 1);
-  ASSERT_EQ(e.matched, 1);
-  EXPECT_EQ(e.matches[0].truth_index, 1);
-  EXPECT_LT(e.matches[0].angle_error_deg, 3.0);
+  EXPECT_EQ(e.reported_doors, 2);
+  ASSERT_EQ(e.matched, 2);
+  EXPECT_EQ(e.matches[1].truth_index, 1);
+  EXPECT_FALSE(e.matches[1].angle_is_lower_bound);
+  EXPECT_LT(e.matches[1].angle_error_deg, 3.0);
+  EXPECT_EQ(e.matches[0].truth_index, 0);
+  EXPECT_TRUE(e.matches[0].angle_is_lower_bound);
+  EXPECT_TRUE(e.matches[0].not_closed);
+  EXPECT_EQ(e.bound_errors, 0);
 }
 
 TEST(Stations, AStationBeyondEachDoorMeasuresTheLeavesSwungOutOfTheRoom) {

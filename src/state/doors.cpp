@@ -184,10 +184,17 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       // A leaf not seen, in a doorway seen through, that free space puts at
       // unseen_leaf_min_bound_deg or more (never below closed_below_deg: the
       // door is not closed): reported at the bound, NOT_CLOSED below
-      // open_from_deg and OPEN from it (stateOfBound; issue 20).
+      // open_from_deg and OPEN from it (stateOfBound; issue 20). With no
+      // leaf, what is seen through is the only evidence: a doorway has a jamb
+      // of its wall on either side, so without trim the run seen through
+      // must lie within the wall's face seen (a run past the face's end is
+      // the room beyond the end of a wall or of a cupboard's front taken
+      // for one: Stations.APartSeenThroughPastTheEndOfAWallSeenIsNoDoorway,
+      // a false NOT_CLOSED door 0.3 m past such an end).
+      const bool jambs = d.casing || (d.s0 >= wall.s_min - kWallEndSlack && d.s1 <= wall.s_max + kWallEndSlack);
       const bool open_unseen = !leaf.found && std::isfinite(leaf.free_from_deg) &&
                                leaf.free_from_deg >= std::max(p.unseen_leaf_min_bound_deg, p.closed_below_deg) &&
-                               leaf.free_from_deg <= 170;
+                               leaf.free_from_deg <= 170 && jambs;
       if (!leaf.found) {
         char buf[512];
         std::snprintf(buf, sizeof buf,

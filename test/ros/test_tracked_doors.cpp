@@ -168,9 +168,10 @@ TEST_F(TrackedDoors, OneIdPerDoorKeptOutOfViewForgottenAndResetWhenTimeGoesBack)
   const Scan house_b = scan("paper_house", 12, "scanner_b", 0.0);
   const Scan far = scan("paper_multidoor", 11, "scanner_c", 30.0);
   // The house scan again from a frame 8 m off in map: a relocalisation jump.
-  Scan jumped = house_a;
-  jumped.frame = "scanner_d";
-  jumped.sensor_to_map = Eigen::Translation3d(0, 8, 0) * house_a.sensor_to_map;
+  Scan jumped_scan = house_a;
+  jumped_scan.frame = "scanner_d";
+  jumped_scan.sensor_to_map = Eigen::Translation3d(0, 8, 0) * house_a.sensor_to_map;
+  const Scan& jumped = jumped_scan;
   tf2_ros::StaticTransformBroadcaster tfb;
   std::vector<geometry_msgs::TransformStamped> tfs;
   for (const Scan* s : {&house_a, &house_b, &far, &jumped}) {

@@ -50,7 +50,9 @@
 //    seen_now;
 //  - a door with a non-finite centre, angle or wall direction is skipped.
 // A relocalisation jump of the fixed frame is not seen here (doors arrive
-// in the fixed frame already): the caller's concern.
+// in the fixed frame already): the caller's concern (DoorStateNodelet
+// calls reset() when its sensor moves in the fixed frame faster than
+// ~max_sensor_speed between two processed clouds).
 #pragma once
 
 #include <Eigen/Core>
