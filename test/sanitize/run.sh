@@ -37,7 +37,7 @@ fi
 if "$OUT/canary" floatcast >"$OUT/canary.log" 2>&1 || ! grep -q "runtime error: .* is outside the range of representable values" "$OUT/canary.log"; then
   echo "sanitize: UBSan did not catch the canary's float-to-int overflow"; failed+=(canary-floatcast)
 fi
-for t in test_cloud_reader test_cloud_conversion test_evaluation test_neighbours test_simulator test_pipeline; do
+for t in test_cloud_reader test_cloud_conversion test_evaluation test_neighbours test_simulator test_pipeline test_sight test_fusion; do
   exe="$OUT/$t"
   [ -x "$exe" ] || { echo "sanitize: $t was not built"; failed+=("$t"); continue; }
   t0=$(date +%s)
