@@ -14,19 +14,11 @@
 #include "door_state_recognition/sim/ground_truth.hpp"
 #include "door_state_recognition/sim/scene.hpp"
 #include "door_state_recognition/sim/sensors.hpp"
+#include "xyz_cloud.hpp"
 
 using namespace dsr;
 
 namespace {
-
-pcl::PointCloud<pcl::PointXYZ> xyz(const pcl::PointCloud<pcl::PointXYZL>& in) {
-  pcl::PointCloud<pcl::PointXYZ> out;
-  out.width = in.width;
-  out.height = in.height;
-  out.points.resize(in.size());
-  for (std::size_t i = 0; i < in.size(); ++i) out.points[i] = pcl::PointXYZ(in[i].x, in[i].y, in[i].z);
-  return out;
-}
 
 // A room of randomRoom(seed) scanned from `stations` positions, all their
 // points in one cloud (the frame of the first station), as registered
