@@ -120,40 +120,43 @@ TEST(Levelling, AnEstimateNearAFrameAxisIsThatAxis) {
   EXPECT_LT((preprocess::nearestFrameAxis(tilted * 2.0, 15.0) - tilted).norm(), 1e-12);
 }
 
-TEST(Levelling, AnAxisGivenAndOneEstimatedGiveTheSameDoorsWhenTheyAgree) {
-  // Frames (the sweep's seeds, three camera families) where `auto` finds
-  // the camera's -y within a degree: both runs level the frame alike and
-  // report the same doors, states and angles.
-  // Stereo frames to 8 m (door_scene_sim's), 1012 and 1024: refined from
-  // their own estimates, 0.03-0.14 deg from -y's, they found other doors.
-  struct Case {
-    std::uint64_t seed;
-    sim::DepthModel model;
-    double max_range;
-  };
-  for (const Case c : {Case{1002, sim::DepthModel::Default, 4.5}, Case{1013, sim::DepthModel::Default, 4.5},
-                       Case{1017, sim::DepthModel::Default, 4.5}, Case{1011, sim::DepthModel::StructuredLight, 4.5},
-                       Case{1012, sim::DepthModel::ActiveStereo, 8.0}, Case{1024, sim::DepthModel::ActiveStereo, 8.0}}) {
-    SCOPED_TRACE("seed=" + std::to_string(c.seed) + " model=" + sim::toString(c.model));
-    sim::RgbdOptions o;
-    o.seed = c.seed;
-    o.depth_model = c.model;
-    o.max_range = c.max_range;
-    const pcl::PointCloud<pcl::PointXYZ> cloud =
-        xyz(sim::captureRgbd(sim::buildScene(sim::randomRoom(c.seed)), o).cloud);
-    Parameters given, estimated;
-    given.up_axis = "-y";
-    estimated.up_axis = "auto";
-    const PipelineResult a = Pipeline(given).run(cloud, false), b = Pipeline(estimated).run(cloud, false);
-    ASSERT_LT(std::acos(std::min(1.0, a.up.dot(b.up))) * 180 / M_PI, 1.0) << a.up.transpose() << " vs " << b.up.transpose();
-    EXPECT_EQ(a.up, b.up);
-    ASSERT_EQ(a.doors.size(), b.doors.size());
-    for (std::size_t i = 0; i < a.doors.size(); ++i) {
-      EXPECT_EQ(a.doors[i].state, b.doors[i].state);
-      EXPECT_NEAR(a.doors[i].opening_angle_deg, b.doors[i].opening_angle_deg, 1.0);
-      EXPECT_LT((a.doors[i].opening_center - b.doors[i].opening_center).norm(), 0.05);
+TEST(Levelling, AnAxisGivenAndOneEstimatedGiveTheSameDoors) {
+  // Camera frames as robots and people take them (door_scene_sim
+  // --robot-camera: 0.3-1.6 m high, pitched -20..+10 deg, rolled up to
+  // 5 deg), every depth family, seeds no rule was tuned on: `auto` and
+  // `-y` level each frame alike (one levelling path) and report the same
+  // doors; the level is the camera's true one within 3 deg on nine frames
+  // in ten and never a wall's normal taken for up.
+  int frames = 0, level = 0;
+  for (const sim::DepthModel model : {sim::DepthModel::Default, sim::DepthModel::StructuredLight,
+                                      sim::DepthModel::TimeOfFlight, sim::DepthModel::ActiveStereo})
+    for (std::uint64_t seed = 3400; seed < 3406; ++seed) {
+      SCOPED_TRACE("seed=" + std::to_string(seed) + " model=" + sim::toString(model));
+      sim::RgbdOptions o;
+      o.seed = seed;
+      o.depth_model = model;
+      o.robot_camera = true;
+      const sim::SimulatedCloud frame = sim::captureRgbd(sim::buildScene(sim::randomRoom(seed)), o);
+      const pcl::PointCloud<pcl::PointXYZ> cloud = xyz(frame.cloud);
+      const Eigen::Vector3d truth = frame.sensor_to_world.linear().transpose() * Eigen::Vector3d::UnitZ();
+      Parameters given, estimated;
+      given.up_axis = "-y";
+      estimated.up_axis = "auto";
+      const PipelineResult a = Pipeline(given).run(cloud, false), b = Pipeline(estimated).run(cloud, false);
+      const double off = std::acos(std::min(1.0, b.up.dot(truth))) * 180 / M_PI;
+      ++frames;
+      level += off <= 3.0;
+      EXPECT_LT(off, 15.0) << "auto up " << b.up.transpose() << ", true " << truth.transpose();
+      ASSERT_LT(std::acos(std::min(1.0, a.up.dot(b.up))) * 180 / M_PI, 0.1)
+          << a.up.transpose() << " vs " << b.up.transpose();
+      ASSERT_EQ(a.doors.size(), b.doors.size());
+      for (std::size_t i = 0; i < a.doors.size(); ++i) {
+        EXPECT_EQ(a.doors[i].state, b.doors[i].state);
+        EXPECT_NEAR(a.doors[i].opening_angle_deg, b.doors[i].opening_angle_deg, 1.0);
+        EXPECT_LT((a.doors[i].opening_center - b.doors[i].opening_center).norm(), 0.05);
+      }
     }
-  }
+  EXPECT_GE(level * 10, frames * 9) << level << " of " << frames << " frames levelled within 3 deg";
 }
 
 TEST(Preprocess, SanitizeDropsNonFiniteAndAbsurdPoints) {
@@ -197,6 +200,18 @@ TEST(Preprocess, NoReturnRaysComeFromTheFittedPinholeCamera) {
       const Eigen::Vector3f want = Eigen::Vector3d((k - cx) / f, (r - cy) / f, 1.0).normalized().cast<float>();
       EXPECT_GT(rays[i].dot(want), std::cos(0.5 / f)) << "pixel " << k << ", " << r;
     }
+  // The image's top lies towards the optical frame's -y; so it does in a
+  // frame rotated as a whole (here 30 deg about the optical axis and 15 about x).
+  const std::optional<preprocess::Pinhole> cam = preprocess::fitPinhole(c, Eigen::Vector3f::Zero());
+  ASSERT_TRUE(cam.has_value());
+  EXPECT_GT(cam->imageUp().dot(-Eigen::Vector3d::UnitY()), std::cos(0.5 * M_PI / 180));
+  const Eigen::Matrix3f turn = (Eigen::AngleAxisf(0.26f, Eigen::Vector3f::UnitX()) *
+                                Eigen::AngleAxisf(0.52f, Eigen::Vector3f::UnitZ())).toRotationMatrix();
+  pcl::PointCloud<pcl::PointXYZ> turned = c;
+  for (auto& q : turned.points) q.getVector3fMap() = turn * q.getVector3fMap();
+  const std::optional<preprocess::Pinhole> turned_cam = preprocess::fitPinhole(turned, Eigen::Vector3f::Zero());
+  ASSERT_TRUE(turned_cam.has_value());
+  EXPECT_GT(turned_cam->imageUp().dot(turn.cast<double>() * -Eigen::Vector3d::UnitY()), std::cos(0.5 * M_PI / 180));
   // Not organized, or not a pinhole camera (rows of a spinning scanner): none.
   pcl::PointCloud<pcl::PointXYZ> flat = c;
   flat.width = static_cast<std::uint32_t>(flat.size());
@@ -211,6 +226,31 @@ TEST(Preprocess, NoReturnRaysComeFromTheFittedPinholeCamera) {
     }
   spin.points[5] = pcl::PointXYZ(nan, nan, nan);
   EXPECT_TRUE(preprocess::noReturnRays(spin, Eigen::Vector3f::Zero()).empty());
+  EXPECT_FALSE(preprocess::fitPinhole(spin, Eigen::Vector3f::Zero()).has_value());
+}
+
+TEST(Levelling, ACameraUprightPicksUpAmongTheRoomsAxes) {
+  // A room corner seen by a camera: floor, back wall and side wall in equal
+  // shares, so each of the three axes is as square to the surfaces as up
+  // is. The camera's upright image (here its -y, pitched 15 deg) picks
+  // the floor's normal, signed like it; with no upright any axis may come.
+  const Eigen::Matrix3d pitch = Eigen::AngleAxisd(15 * M_PI / 180, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const Eigen::Vector3d up = pitch * -Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d axes[3] = {up, pitch * Eigen::Vector3d::UnitZ(), pitch * Eigen::Vector3d::UnitX()};
+  preprocess::Points pts, normals;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.f, 2.f);
+  for (int k = 0; k < 3; ++k)
+    for (int i = 0; i < 1000; ++i) {
+      const Eigen::Vector3d a = axes[(k + 1) % 3], b = axes[(k + 2) % 3];
+      pts.push_back((a * u(rng) + b * u(rng) - 0.5 * axes[k]).cast<float>());
+      normals.push_back(axes[k].cast<float>());
+    }
+  for (const Eigen::Vector3d& upright : {Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(0.1, -1, 0.2)}) {
+    const std::optional<Eigen::Vector3d> got = preprocess::estimateUp(pts, normals, 1, upright);
+    ASSERT_TRUE(got.has_value());
+    EXPECT_GT(got->dot(up), std::cos(0.5 * M_PI / 180)) << got->transpose();
+  }
 }
 
 TEST(Preprocess, VoxelGridKeepsOneCentroidPerVoxel) {
@@ -1458,6 +1498,7 @@ TEST(BadInput, RayParallelToAWallDoesNotOverflowTheShadowGrid) {
   ASSERT_EQ(cloud.height, 48u);
   Parameters p;
   p.up_axis = "-y";
+  p.refine_up_deg = 25;
   PipelineResult r;
   ASSERT_NO_THROW(r = Pipeline(p).run(cloud, true));
   EXPECT_EQ(r.points_in, 3072u);

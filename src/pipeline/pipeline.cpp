@@ -138,14 +138,18 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   std::vector<float> vertical_z;
   float foot_z = 0, head_z = 0;
   bool levelled = false;
+  // A camera frame's pinhole camera (none for other clouds, organized LiDAR
+  // rings included): its rays without a return and its image's up.
+  const std::optional<preprocess::Pinhole> camera =
+      organized ? preprocess::fitPinhole(cloud, viewpoint_in.cast<float>()) : std::nullopt;
   {
     util::FirstError error;
 #pragma omp parallel
 #pragma omp single
     {
-      if (organized) {
+      if (camera) {
 #pragma omp task shared(no_return, error)
-        error.run([&] { no_return = preprocess::noReturnRays(cloud, viewpoint_in.cast<float>()); });
+        error.run([&] { no_return = preprocess::noReturnRays(cloud, *camera); });
       }
       error.run([&] {
         // One levelling path: an axis given and one estimated seed the same
@@ -157,7 +161,8 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
         const bool given = up.has_value();
         const double reach = p.refine_up_deg > 0 ? p.refine_up_deg : 10.0;
         if (!given) {
-          up = preprocess::estimateUp(thinned, normals.n, static_cast<unsigned>(p.random_seed));
+          up = preprocess::estimateUp(thinned, normals.n, static_cast<unsigned>(p.random_seed),
+                                      camera ? std::optional<Eigen::Vector3d>(camera->imageUp()) : std::nullopt);
           if (up) up = preprocess::nearestFrameAxis(*up, reach);
         }
         if (up && (!given || p.refine_up_deg > 0)) up = preprocess::refineUp(*up, normals.n, reach);

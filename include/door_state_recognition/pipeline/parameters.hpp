@@ -10,7 +10,7 @@ namespace dsr {
 struct Parameters {
   // --- levelling ---------------------------------------------------------
   std::string up_axis = "+z";        // +x -x +y -y +z -z or auto
-  double refine_up_deg = 15.0;       // deg, a given axis is refined from the floor or walls within this; 0: taken as exact
+  double refine_up_deg = 25.0;       // deg, a given axis is refined from the floor or walls within this (a robot camera pitched to 20 deg, rolled 5); 0: taken as exact
   // --- preprocessing -----------------------------------------------------
   double voxel_size = 0.02;          // m, 0 disables downsampling
   double max_abs_coordinate = 1e4;   // m, points farther out are dropped as garbage

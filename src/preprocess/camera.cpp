@@ -1,0 +1,92 @@
+#include "door_state_recognition/preprocess/camera.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace dsr {
+namespace preprocess {
+
+std::optional<Pinhole> fitPinhole(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vector3f& viewpoint) {
+  const int w = static_cast<int>(cloud.width), h = static_cast<int>(cloud.height);
+  if (h < 2 || w < 2 || cloud.size() != static_cast<std::size_t>(w) * h) return std::nullopt;
+  auto finite = [](const pcl::PointXYZ& q) { return std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z); };
+  // Pixel coordinates scaled to about [-1, 1].
+  const double cu = 0.5 * w, cv = 0.5 * h, sc = 0.5 * w;
+  // u = (m1 . X) / (m3 . X), v = (m2 . X) / (m3 . X), X from the viewpoint:
+  // two linear equations in m = (m1, m2, m3) per pixel, solved by the
+  // eigenvector of the smallest eigenvalue of A^T A.
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector3d>> sample;
+  const int grid = std::max(1, std::min(w, h) / 60);
+  for (int r = 0; r < h; r += grid)
+    for (int c = 0; c < w; c += grid) {
+      const pcl::PointXYZ& q = cloud.points[static_cast<std::size_t>(r) * w + c];
+      if (!finite(q)) continue;
+      const Eigen::Vector3d X = Eigen::Vector3d(q.x, q.y, q.z) - viewpoint.cast<double>();
+      if (X.norm() < 1e-3) continue;
+      sample.push_back({Eigen::Vector2d((c - cu) / sc, (r - cv) / sc), X});
+    }
+  if (sample.size() < 100) return std::nullopt;
+  Eigen::Matrix<double, 9, 9> ata = Eigen::Matrix<double, 9, 9>::Zero();
+  for (const auto& [uv, X] : sample) {
+    Eigen::Matrix<double, 9, 1> a, b;
+    a << X, Eigen::Vector3d::Zero(), -uv.x() * X;
+    b << Eigen::Vector3d::Zero(), X, -uv.y() * X;
+    ata += a * a.transpose() + b * b.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 9, 9>> es(ata);
+  const Eigen::Matrix<double, 9, 1> m = es.eigenvectors().col(0);
+  Eigen::Matrix3d M;
+  M.row(0) = m.segment<3>(0).transpose();
+  M.row(1) = m.segment<3>(3).transpose();
+  M.row(2) = m.segment<3>(6).transpose();
+  if (!M.allFinite() || std::abs(M.determinant()) < 1e-12) return std::nullopt;
+  // Within a pixel at nine in ten of the sampled pixels.
+  std::vector<double> err;
+  int ahead = 0;
+  for (const auto& [uv, X] : sample) {
+    const Eigen::Vector3d y = M * X;
+    ahead += y.z() > 0;
+    err.push_back(std::abs(y.z()) > 1e-12 ? (y.head<2>() / y.z() - uv).norm() * sc : 1e9);
+  }
+  std::nth_element(err.begin(), err.begin() + err.size() * 9 / 10, err.end());
+  if (!(err[err.size() * 9 / 10] <= 1.0)) return std::nullopt;
+  if (2 * ahead < static_cast<int>(sample.size())) M = -M;  // m3 . X > 0 in front of the camera
+  Pinhole cam;
+  cam.Mi = M.inverse();
+  cam.cu = cu, cam.cv = cv, cam.sc = sc;
+  cam.width = w, cam.height = h;
+  return cam;
+}
+
+Eigen::Vector3d Pinhole::ray(double col, double row) const {
+  // M d = (u, v, 1): m3 . d = 1, in front.
+  return (Mi * Eigen::Vector3d((col - cu) / sc, (row - cv) / sc, 1.0)).normalized();
+}
+
+Eigen::Vector3d Pinhole::imageUp() const {
+  // A ray moves by Mi's second column per unit of (scaled) row, downwards:
+  // Mi = R^T K^-1 up to scale, whose second column is the camera's y axis
+  // (rows square to columns, as in every camera's sensor).
+  return -Mi.col(1).normalized();
+}
+
+Points noReturnRays(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Pinhole& cam, int step) {
+  Points out;
+  const int w = static_cast<int>(cloud.width), h = static_cast<int>(cloud.height);
+  if (w != cam.width || h != cam.height || cloud.size() != static_cast<std::size_t>(w) * h || step < 1) return out;
+  auto finite = [](const pcl::PointXYZ& q) { return std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z); };
+  for (int r = 0; r < h; r += step)
+    for (int c = 0; c < w; c += step)
+      if (!finite(cloud.points[static_cast<std::size_t>(r) * w + c])) out.push_back(cam.ray(c, r).cast<float>());
+  return out;
+}
+
+Points noReturnRays(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vector3f& viewpoint, int step) {
+  const std::optional<Pinhole> cam = fitPinhole(cloud, viewpoint);
+  return cam ? noReturnRays(cloud, *cam, step) : Points();
+}
+}  // namespace preprocess
+}  // namespace dsr
