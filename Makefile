@@ -19,7 +19,7 @@ export PATH := /usr/bin:$(PATH)
 CATKIN_ARGS := -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 \
                -DPython3_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=ON
 
-.PHONY: deps build test demo bench eval clean rviz-shot sanitize fuzz
+.PHONY: deps build test demo bench eval clean rviz-shot gallery sanitize fuzz
 FUZZ_SECONDS ?= 60
 
 deps:
@@ -80,6 +80,11 @@ soak: build
 
 rviz-shot: build
 	@$(REPO)/scripts/rviz_shot.sh
+
+# Camera frames of each depth family with the doors found drawn on them:
+# doc/gallery.png and its captions doc/gallery.txt.
+gallery: build
+	@/usr/bin/python3 $(REPO)/scripts/gallery.py
 
 clean:
 	rm -rf $(BUILD)
