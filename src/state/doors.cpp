@@ -304,8 +304,10 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       const Foot foot = closed ? footOf(pts, wall, leaf, floor_z, p.leaf_thickness, p.face_tolerance) : Foot{1, 0};
       const bool free_foot = foot.seen >= 0.3 || foot.blocked < 0.5;
       // Something standing before the doorway across its width: furniture
-      // against the wall, not a door (see furnishedShare).
-      const double furnished = open_unseen ? 0.0 : furnishedShare(pts, wall, leaf, floor_z);
+      // against the wall, not a door (see furnishedShare). A pass over the
+      // points: only where nothing else has turned the doorway down yet
+      // (-1 in the trace: not looked at).
+      const double furnished = open_unseen || !evidence || !free_foot ? -1.0 : furnishedShare(pts, wall, leaf, floor_z);
       const bool clear_way = furnished < kFurnishedShare;
       const double height = (std::isfinite(d.top) ? d.top : leaf.top_z) - floor_z;
       const double wall_h = top_z - floor_z;
