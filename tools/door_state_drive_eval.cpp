@@ -11,6 +11,7 @@
 
 #include "door_state_recognition/eval/drive_eval.hpp"
 #include "door_state_recognition/util/omp_spin.hpp"
+#include "cli_args.hpp"
 
 namespace {
 
@@ -41,21 +42,8 @@ const char* kUsage =
     "\n"
     "Exit status: 0 on success, 2 on bad arguments.\n";
 
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-double number(const std::string& flag, const std::string& v) {
-  std::size_t used = 0;
-  double x = 0;
-  try {
-    x = std::stod(v, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != v.size() || v.empty()) throw UsageError(flag + ": not a number: '" + v + "'");
-  return x;
-}
+using dsr::tools::toInt;
+using dsr::tools::UsageError;
 
 }  // namespace
 
@@ -67,10 +55,7 @@ int main(int argc, char** argv) {
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
-      auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw UsageError(a + " needs a value");
-        return argv[++i];
-      };
+      auto value = [&]() { return dsr::tools::nextValue(argc, argv, i); };
       if (a == "-h" || a == "--help") {
         std::cout << kUsage;
         return 0;
@@ -82,27 +67,19 @@ int main(int argc, char** argv) {
       } else if (a == "--seeds") {
         const std::string v = value();
         const std::size_t dash = v.find('-', 1);
-        first = static_cast<long>(number(a, v.substr(0, dash)));
-        last = dash == std::string::npos ? first : static_cast<long>(number(a, v.substr(dash + 1)));
+        first = static_cast<long>(toInt(a, v.substr(0, dash)));
+        last = dash == std::string::npos ? first : static_cast<long>(toInt(a, v.substr(dash + 1)));
         if (first < 0 || last < first) throw UsageError("--seeds needs A-B with 0 <= A <= B");
       } else if (a == "--every") {
-        const double k = number(a, value());
-        if (!(k >= 1 && k <= 1000 && k == static_cast<int>(k))) throw UsageError("--every must be an integer in [1, 1000]");
+        const long long k = toInt(a, value());
+        if (k < 1 || k > 1000) throw UsageError("--every must be an integer in [1, 1000]");
         o.every = static_cast<int>(k);
       } else if (a == "--toggle") {
         if (value() != "auto") throw UsageError("--toggle takes auto");
         o.auto_toggle = true;
       } else if (a == "--toggle-door") {
-        const std::string v = value();
-        const std::size_t colon = v.find(':'), at = v.find('@');
-        if (colon == std::string::npos || at == std::string::npos || at < colon) throw UsageError("--toggle-door needs K:ANGLE@T");
-        dsr::sim::DoorChange c;
-        c.door = static_cast<int>(number(a, v.substr(0, colon)));
-        c.angle_deg = number(a, v.substr(colon + 1, at - colon - 1));
-        c.t = number(a, v.substr(at + 1));
-        if (c.door < 0 || c.angle_deg < 0 || c.angle_deg > 180 || c.t < 0)
-          throw UsageError("--toggle-door needs K >= 0, ANGLE in [0, 180] and T >= 0");
-        o.changes.push_back(c);
+        const dsr::tools::Toggle c = dsr::tools::toToggle(a, value());
+        o.changes.push_back({c.door, c.angle_deg, c.t});
       } else if (a == "--lidar-motion") {
         o.lidar_motion = true;
       } else if (a == "--config") {
