@@ -347,3 +347,43 @@ TEST(DriveTracker, RunMovesTheCloudIntoTheFixedFrame) {
   EXPECT_NEAR((*r.viewpoint - Eigen::Vector3d(0, 2, 1)).norm(), 0, 1e-12);
   EXPECT_TRUE(r.doors.empty());
 }
+
+namespace {
+
+// A wall at x = 2 (y in [-2, 2], z from -1, the floor, to 1.5) seen from the
+// origin, every 2 cm; with `doorway`, rays through |y| < 0.45, z < 1 end on
+// a wall behind it at x = 4.
+pcl::PointCloud<pcl::PointXYZ> wallCloud(bool doorway) {
+  pcl::PointCloud<pcl::PointXYZ> c;
+  for (double y = -2; y <= 2; y += 0.02)
+    for (double z = -1; z <= 1.5; z += 0.02) {
+      const bool through = doorway && std::abs(y) < 0.45 && z < 1.0;
+      c.push_back(through ? pcl::PointXYZ(4, 2 * y, 2 * z) : pcl::PointXYZ(2, y, z));
+    }
+  return c;
+}
+
+}  // namespace
+
+TEST(DriveTracker, ADoorwayLaterSweepsMeasureAsPlainWallIsDroppedAnOpenOneIsKept) {
+  for (const bool doorway : {false, true}) {
+    dsr::DriveTrackerOptions o;
+    o.disprove = true;
+    dsr::DriveTracker t(o);
+    dsr::PipelineResult r;
+    r.doors = {door(Eigen::Vector3d(2, 0, -1), 0.0, false, 0.6, Eigen::Vector3d::UnitY())};
+    const dsr::Parameters p;
+    t.fuse(r, 1.0, p, Eigen::Vector3d::Zero());
+    ASSERT_EQ(t.tracks().size(), 1u);
+    const dsr::Pipeline pipeline{p};
+    std::size_t disproved = 0;
+    for (int k = 0; k < 3; ++k) {
+      pcl::PointCloud<pcl::PointXYZ> c = wallCloud(doorway);
+      const auto step = t.process(pipeline, c, Eigen::Isometry3d::Identity(), 2.0 + k, false);
+      disproved += step.step.disproved;
+      if (!doorway && k < 2) EXPECT_EQ(t.tracks().size(), 1u) << "dropped after " << k + 1 << " sweeps: 3 are needed";
+    }
+    EXPECT_EQ(disproved, doorway ? 0u : 1u) << (doorway ? "an open doorway" : "a plain wall");
+    EXPECT_EQ(t.tracks().size(), doorway ? 1u : 0u) << (doorway ? "an open doorway" : "a plain wall");
+  }
+}

@@ -18,13 +18,13 @@ namespace {
 const char* kUsage =
     "usage: door_state_drive_eval [--sensor S] [--seeds A-B] [--every K] [--toggle auto]\n"
     "                             [--toggle-door K:ANGLE@T ...] [--lidar-motion]\n"
-    "                             [--config YAML] [--verbose]\n"
+    "                             [--disprove] [--config YAML] [--verbose]\n"
     "\n"
     "For each seed, plans the drive of `door_scene_sim --drive --seed S --sensor X`,\n"
     "simulates every K-th cloud, runs it through the nodelet's core (DriveTracker:\n"
     "the pipeline with the sensor's origin as viewpoint, then DoorFusion) and scores\n"
     "the last tracked doors against the drive's truth in map. Prints the figures\n"
-    "as JSON on stdout (with --verbose also each drive's, under \"drives\") and one\n"
+    "as JSON on stdout (with --verbose also each drive's, under \"per_drive\") and one\n"
     "line per drive, with its seed, on stderr.\n"
     "\n"
     "  --sensor S            lidar16 | lidar32 | lidar64 | lidar128 | rgbd (default lidar64)\n"
@@ -36,6 +36,8 @@ const char* kUsage =
     "                        middle of its time in view; the latency is scored\n"
     "  --toggle-door K:ANGLE@T  door K is at ANGLE deg from T s on (repeatable)\n"
     "  --lidar-motion        LiDAR sweeps not deskewed (the robot moves during one)\n"
+    "  --disprove            drop tracks whose doorway later sweeps measure as wall\n"
+    "                        (DriveTracker's disproof, off in the nodelet)\n"
     "  --config YAML         pipeline parameters (as door_state_cli --config)\n"
     "  --verbose             each drive's doors and changes in the JSON\n"
     "  -h, --help            show this help\n"
@@ -84,6 +86,8 @@ int main(int argc, char** argv) {
         o.lidar_motion = true;
       } else if (a == "--config") {
         o.params = dsr::loadParameters(value());
+      } else if (a == "--disprove") {
+        o.tracker.disprove = true;
       } else if (a == "--verbose") {
         verbose = true;
       } else {
@@ -107,7 +111,7 @@ int main(int argc, char** argv) {
       }
       for (const auto& c : r.changes) latency += " " + (c.latency < 0 ? std::string("none") : std::to_string(c.latency));
       std::cerr << "seed " << seed << " " << o.sensor << ": " << r.processed << "/" << r.frames << " clouds, passed "
-                << passed << ", right " << right << ", false " << r.false_doors << ", doors with several ids "
+                << passed << ", right " << right << ", false " << r.false_doors << " (" << r.disproved << " disproved), doors with several ids "
                 << several << (latency.empty() ? "" : ", change latency" + latency)
                 << (wrong.empty() ? "" : ", wrong" + wrong) << ", " << r.pipeline_ms_median << " ms/cloud\n";
       if (verbose) per.push_back(dsr::eval::toJson(r));
@@ -116,7 +120,7 @@ int main(int argc, char** argv) {
     out["sensor"] = o.sensor;
     out["seeds"] = std::to_string(first) + "-" + std::to_string(last);
     out["every"] = drives.empty() ? 0 : drives.front().every;
-    if (verbose) out["drives"] = per;
+    if (verbose) out["per_drive"] = per;
     std::cout << out.dump(1) << "\n";
     return 0;
   } catch (const UsageError& e) {

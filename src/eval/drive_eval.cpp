@@ -18,21 +18,35 @@ namespace {
 
 double horizontal(const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return std::hypot(a.x() - b.x(), a.y() - b.y()); }
 
-sim::DoorChange autoToggle(const sim::DrivePlan& plan) {
-  const nlohmann::json truth = sim::driveTruthJson(plan);
-  int best = -1, most = 0;
+// The drive with one door changed: the passed doors (not the one driven
+// through, which must stay open for the path) by frames in view, the first
+// whose change still leaves a drive (the leaf's new swing can move the path).
+sim::DrivePlan withAutoToggle(const sim::RoomSpec& spec, sim::DriveOptions d) {
+  const sim::DrivePlan plain = sim::planDrive(spec, d);
+  const nlohmann::json truth = sim::driveTruthJson(plain);
+  std::vector<std::pair<int, int>> order;  // (-frames in view, door)
   for (std::size_t k = 0; k < truth["doors"].size(); ++k) {
-    const nlohmann::json& d = truth["doors"][k];
-    const int frames = d["frames_in_view"].get<int>();
-    if (d["passed_within_3m"].get<bool>() && frames > most) best = static_cast<int>(k), most = frames;
+    const nlohmann::json& t = truth["doors"][k];
+    const int frames = t["frames_in_view"].get<int>();
+    if (t["passed_within_3m"].get<bool>() && frames > 0 && static_cast<int>(k) != plain.through_door)
+      order.emplace_back(-frames, static_cast<int>(k));
   }
-  if (best < 0) throw std::invalid_argument("no door passed within 3 m in view to toggle");
-  const nlohmann::json& d = truth["doors"][best];
-  sim::DoorChange c;
-  c.door = best;
-  c.angle_deg = plan.scenes.front().doors[best].angle_deg < 5.0 ? 60.0 : 0.0;
-  c.t = 0.5 * (d["first_in_view_t"].get<double>() + d["last_in_view_t"].get<double>());
-  return c;
+  std::sort(order.begin(), order.end());
+  for (const auto& [minus_frames, k] : order) {
+    const nlohmann::json& t = truth["doors"][k];
+    sim::DoorChange c;
+    c.door = k;
+    c.angle_deg = plain.scenes.front().doors[k].angle_deg < 5.0 ? 60.0 : 0.0;
+    c.t = 0.5 * (t["first_in_view_t"].get<double>() + t["last_in_view_t"].get<double>());
+    sim::DriveOptions changed = d;
+    changed.changes.push_back(c);
+    try {
+      return sim::planDrive(spec, changed);
+    } catch (const std::invalid_argument&) {
+      // this door's change leaves no drive: the next one
+    }
+  }
+  return plain;  // no door to change: the drive as it is (no change scored)
 }
 
 sim::DrivePlan plan(std::uint64_t seed, const DriveEvalOptions& o) {
@@ -42,9 +56,7 @@ sim::DrivePlan plan(std::uint64_t seed, const DriveEvalOptions& o) {
   d.seed = seed;
   d.lidar_motion = o.lidar_motion;
   d.changes = o.changes;
-  if (!o.auto_toggle) return sim::planDrive(spec, d);
-  d.changes.push_back(autoToggle(sim::planDrive(spec, d)));
-  return sim::planDrive(spec, d);
+  return o.auto_toggle ? withAutoToggle(spec, d) : sim::planDrive(spec, d);
 }
 
 // Share of door k's leaf cells (5 cm along x 10 cm up, 0.25-1.75 m above the
@@ -142,6 +154,7 @@ DriveEvalResult evaluateDrive(std::uint64_t seed, const DriveEvalOptions& o) {
     const DriveTracker::Processed step = tracker.process(pipeline, xyz, f.cloud.sensor_to_world, f.t, false);
     times.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     if (step.step.relocalised) ++r.relocalisations;
+    r.disproved += static_cast<int>(step.step.disproved);
     ++r.processed;
     const std::vector<TrackedDoor>& tracks = tracker.tracks();
     for (const TrackedDoor& t : tracks) {  // every track near a door is one of its ids
@@ -247,7 +260,7 @@ nlohmann::json toJson(const DriveEvalResult& r) {
   }
   return {{"seed", r.seed}, {"sensor", r.sensor}, {"seconds", r.seconds}, {"frames", r.frames},
           {"every", r.every}, {"processed", r.processed}, {"false_doors", r.false_doors},
-          {"relocalisations", r.relocalisations}, {"process_ms_median", r.pipeline_ms_median},
+          {"relocalisations", r.relocalisations}, {"disproved", r.disproved}, {"process_ms_median", r.pipeline_ms_median},
           {"doors", doors}, {"changes", changes}, {"false_tracks", false_tracks}};
 }
 

@@ -708,6 +708,10 @@ class DoorStateNodelet : public nodelet::Nodelet {
                             step.moved_m, fixed_frame_.c_str(), step.dt_s, drive_.options().max_sensor_speed);
       noteError("relocalisation jump: tracked doors reset");
     }
+    if (step.disproved > 0)
+      NODELET_DEBUG_THROTTLE(5.0, "door_state: %zu tracked door(s) dropped: their doorway measured as wall",
+                             step.disproved);
+    disproved_ += step.disproved;
     if (step.fusion.outcome == dsr::DoorFusion::Outcome::Reset) {
       ++fusion_resets_;
       NODELET_WARN_THROTTLE(5.0, "door_state: cloud stamped %.3f is %.3f s older than the newest fused (%.3f): "
@@ -820,6 +824,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
       stat.add("tracked doors reset (time went backwards)", fusion_resets_.load());
       stat.add("clouds not fused (out of order)", fusion_ignored_.load());
       stat.add("tracked doors reset (relocalisation)", relocalisations_.load());
+      stat.add("tracked doors dropped (doorway measured as wall)", disproved_.load());
     }
   }
 
@@ -845,7 +850,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
   ros::WallTime last_refusal_time_;
   dsr::DoorTracker tracker_;                        // worker only
   dsr::DriveTracker drive_;                         // worker only (fixed frame): ~forget_after_s, ~state_change_deg, ~max_sensor_speed
-  std::atomic<unsigned long> fusion_resets_{0}, fusion_ignored_{0}, relocalisations_{0};
+  std::atomic<unsigned long> fusion_resets_{0}, fusion_ignored_{0}, relocalisations_{0}, disproved_{0};
   std::atomic<std::size_t> tracked_count_{0};
   pcl::PointCloud<pcl::PointXYZ> cloud_;            // worker only, reused between clouds
   // The one-cloud slot between the subscriber callback and the worker.

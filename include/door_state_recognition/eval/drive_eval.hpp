@@ -51,9 +51,10 @@ struct DriveEvalOptions {
   int every = 0;
   bool lidar_motion = false;               // sweeps not deskewed (sim::DriveOptions)
   std::vector<sim::DoorChange> changes;    // as door_scene_sim --toggle-door
-  // One change per drive chosen by the seed's drive: the passed door seen in
-  // the most frames, closed -> 60 deg or else -> closed, at the middle of
-  // its time in view.
+  // One change per drive: the passed door seen in the most frames (not the
+  // one driven through), closed -> 60 deg or else -> closed, at the middle
+  // of its time in view; the next such door when that change leaves no
+  // drive; none when no door is left.
   bool auto_toggle = false;
   double pass_within_m = 3.0, angle_tolerance_deg = 5.0, match_distance_m = 0.5;
   double leaf_seen_share = 0.10;
@@ -96,6 +97,7 @@ struct DriveEvalResult {
   std::vector<ChangeOutcome> changes;
   double pipeline_ms_median = 0, fusion_ms_max = 0;
   int relocalisations = 0;                 // resets for a sensor jump (none expected in a simulated drive)
+  int disproved = 0;                       // tracks dropped, their doorway measured as wall (DriveTracker)
 };
 
 // Throws std::invalid_argument for absurd options (as sim::planDrive).

@@ -12,9 +12,26 @@
 // not in one frame any more: every track is dropped (DoorFusion::reset()).
 // Not judged when the sensor is unknown (a cloud arriving in the fixed frame
 // already) nor across stamps going backwards (DoorFusion resets then anyway).
+//
+// Disproof (options.disprove, off by default; process() only: it needs the
+// points and the sensor): a door is
+// a fixed structure, found again in most sweeps that measure it, while a
+// door made of one sweep's artefacts (ring gaps, a shadow on a plain wall)
+// is not found again where later sweeps measure plain wall. A track that
+// this cloud does not show, whose opening centre lies within 4 m of the
+// sensor (horizontally), gets a miss when the cloud measured its doorway as
+// wall: of the rays that reached the doorway's rectangle on its wall's plane
+// (its middle 80 %, 0.3-1.8 m above its floor), at least 30 ended on the
+// plane (within 5 cm) and at least 70 % of them did (the rest passed
+// through). A track with at least 3 misses and at least 3 times as many
+// misses as observations is dropped (Step::disproved). An open or ajar
+// doorway passes rays through it or stops them before its plane: never a
+// miss; a closed door whose leaf is flush with its wall can get misses, but
+// is found again in most of the sweeps that measure it.
 #pragma once
 
 #include <Eigen/Geometry>
+#include <map>
 #include <optional>
 #include <vector>
 
@@ -30,6 +47,11 @@ struct DriveTrackerOptions {
   FusionOptions fusion;           // its pipeline thresholds are overwritten by each cloud's Parameters
   double max_sensor_speed = 3.0;  // m/s; 0: no relocalisation check
   double jump_slack_m = 0.5;      // m, allowed on top of max_sensor_speed x dt
+  // Drop tracks whose doorway later sweeps measure as wall (above). Off by
+  // default: it can drop a closed door whose leaf is flush with its wall
+  // and that the pipeline finds in few sweeps, which then comes back with a
+  // new id (door_state_drive_eval --disprove measures it; doc/results.md).
+  bool disprove = false;
   // Throws std::invalid_argument naming the first option out of range.
   void validate() const;
 };
@@ -41,6 +63,7 @@ class DriveTracker {
     double newest_before = 0;     // the newest stamp fused before this cloud (NaN: none)
     bool relocalised = false;     // the tracks were reset for a sensor jump
     double moved_m = 0, dt_s = 0; // that jump: distance and time between the two clouds
+    std::size_t disproved = 0;    // tracks dropped: their doorway measured as wall (process() only)
   };
   struct Processed {
     PipelineResult result;        // in the fixed frame
@@ -77,8 +100,12 @@ class DriveTracker {
   void reset();
 
  private:
+  // Counts misses (doorway measured as wall) and drops the disproved tracks.
+  std::size_t disprove(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vector3d& sensor);
+
   DriveTrackerOptions options_;
   DoorFusion fusion_;
+  std::map<std::uint32_t, int> misses_;  // by track id
   std::optional<Eigen::Vector3d> last_sensor_;
   double last_sensor_stamp_ = 0;
 };
