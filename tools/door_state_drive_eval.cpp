@@ -109,7 +109,9 @@ int main(int argc, char** argv) {
         right += d.right;
         if (!d.right) wrong += " " + std::to_string(d.door) + ":" + d.why;
       }
-      for (const auto& c : r.changes) latency += " " + (c.latency < 0 ? std::string("none") : std::to_string(c.latency));
+      auto clouds = [](int n) { return n < 0 ? std::string("none") : std::to_string(n); };
+      for (const auto& c : r.changes)
+        latency += " " + clouds(c.latency) + " (from detection " + clouds(c.latency_from_detection) + ")";
       std::cerr << "seed " << seed << " " << o.sensor << ": " << r.processed << "/" << r.frames << " clouds, passed "
                 << passed << ", right " << right << ", false " << r.false_doors << " (" << r.disproved << " disproved), doors with several ids "
                 << several << (latency.empty() ? "" : ", change latency" + latency)

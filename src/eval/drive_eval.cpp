@@ -138,6 +138,7 @@ DriveEvalResult evaluateDrive(std::uint64_t seed, const DriveEvalOptions& o) {
   DriveTracker tracker(o.tracker);
   std::vector<std::set<std::uint32_t>> ids(n);
   std::vector<std::vector<std::string>> shown(n);  // per door, per processed cloud: its matched track's state
+  std::vector<std::vector<std::string>> detected(n);  // the same for the cloud's own doors
   std::vector<std::vector<char>> in_view(n);
   std::vector<double> times;
   pcl::PointCloud<pcl::PointXYZ> xyz;
@@ -167,8 +168,12 @@ DriveEvalResult evaluateDrive(std::uint64_t seed, const DriveEvalOptions& o) {
       if (nearest >= 0) ids[nearest].insert(t.id);
     }
     const std::vector<int> match = matchTracks(tracks, scene, o.match_distance_m);
+    std::vector<TrackedDoor> own(step.result.doors.size());  // this cloud's doors, matched alike
+    for (std::size_t j = 0; j < own.size(); ++j) own[j].door = step.result.doors[j];
+    const std::vector<int> match_own = matchTracks(own, scene, o.match_distance_m);
     for (int k = 0; k < n; ++k) {
       shown[k].push_back(match[k] < 0 ? std::string() : toString(tracks[match[k]].door.state));
+      detected[k].push_back(match_own[k] < 0 ? std::string() : toString(own[match_own[k]].door.state));
       in_view[k].push_back(sim::sensorSeesDoor(scene, f.cloud, k));
       if (in_view[k].back()) r.doors[k].in_view = true;
       if (scene.doors[k].angle_deg != final_scene.doors[k].angle_deg) continue;  // before the door's last change
@@ -228,8 +233,12 @@ DriveEvalResult evaluateDrive(std::uint64_t seed, const DriveEvalOptions& o) {
       const double t = p.frameTime(j * r.every);
       if (t < c.t || t >= next) continue;
       if (co.first_showing < 0 && in_view[c.door][j]) co.first_showing = static_cast<int>(j);
-      if (co.first_showing >= 0 && showsState(shown[c.door][j], co.from_state, co.to_state)) {
-        co.latency = static_cast<int>(j) - co.first_showing + 1;
+      if (co.first_detecting < 0 && showsState(detected[c.door][j], co.from_state, co.to_state))
+        co.first_detecting = static_cast<int>(j);
+      const bool tracked = showsState(shown[c.door][j], co.from_state, co.to_state);
+      if (co.first_showing >= 0 && co.latency < 0 && tracked) co.latency = static_cast<int>(j) - co.first_showing + 1;
+      if (co.first_detecting >= 0 && tracked) {
+        co.latency_from_detection = static_cast<int>(j) - co.first_detecting + 1;
         break;
       }
     }
@@ -250,7 +259,9 @@ nlohmann::json toJson(const DriveEvalResult& r) {
     changes.push_back({{"door", c.change.door}, {"t", c.change.t}, {"to_deg", c.change.angle_deg},
                        {"from_state", c.from_state}, {"to_state", c.to_state},
                        {"first_showing_cloud", c.first_showing < 0 ? nlohmann::json(nullptr) : nlohmann::json(c.first_showing)},
-                       {"latency_clouds", c.latency < 0 ? nlohmann::json(nullptr) : nlohmann::json(c.latency)}});
+                       {"latency_clouds", c.latency < 0 ? nlohmann::json(nullptr) : nlohmann::json(c.latency)},
+                       {"first_detecting_cloud", c.first_detecting < 0 ? nlohmann::json(nullptr) : nlohmann::json(c.first_detecting)},
+                       {"latency_from_detection_clouds", c.latency_from_detection < 0 ? nlohmann::json(nullptr) : nlohmann::json(c.latency_from_detection)}});
   nlohmann::json false_tracks = nlohmann::json::array();
   for (const TrackedDoor& t : r.false_tracks) {
     const Eigen::Vector3d& c = t.door.opening_center;
@@ -266,9 +277,10 @@ nlohmann::json toJson(const DriveEvalResult& r) {
 
 nlohmann::json summarize(const std::vector<DriveEvalResult>& drives) {
   int passed = 0, right = 0, passed_in_view = 0, right_in_view = 0, not_closed_right = 0, false_doors = 0,
-      clean_drives = 0, several_ids = 0, changes = 0, shown_within_2 = 0, never_shown = 0;
+      clean_drives = 0, several_ids = 0, changes = 0, shown_within_2 = 0, never_shown = 0, detected = 0,
+      detected_within_2 = 0;
   std::map<std::string, int> why;
-  nlohmann::json latencies = nlohmann::json::array();
+  nlohmann::json latencies = nlohmann::json::array(), from_detection = nlohmann::json::array();
   for (const DriveEvalResult& r : drives) {
     false_doors += r.false_doors;
     clean_drives += r.false_doors == 0;
@@ -287,6 +299,10 @@ nlohmann::json summarize(const std::vector<DriveEvalResult>& drives) {
       latencies.push_back(c.latency < 0 ? nlohmann::json(nullptr) : nlohmann::json(c.latency));
       shown_within_2 += c.latency >= 1 && c.latency <= 2;
       never_shown += c.latency < 0;
+      if (c.first_detecting < 0) continue;  // no cloud alone showed the new state
+      ++detected;
+      from_detection.push_back(c.latency_from_detection < 0 ? nlohmann::json(nullptr) : nlohmann::json(c.latency_from_detection));
+      detected_within_2 += c.latency_from_detection >= 1 && c.latency_from_detection <= 2;
     }
   }
   auto share = [](int a, int b) { return b ? nlohmann::json(static_cast<double>(a) / b) : nlohmann::json(nullptr); };
@@ -306,7 +322,10 @@ nlohmann::json summarize(const std::vector<DriveEvalResult>& drives) {
           {"changes_shown", changes},
           {"changes_within_2_clouds", shown_within_2},
           {"changes_never_shown", never_shown},
-          {"change_latencies_clouds", latencies}};
+          {"change_latencies_clouds", latencies},
+          {"changes_detected", detected},
+          {"changes_detected_within_2_clouds", detected_within_2},
+          {"change_latencies_from_detection_clouds", from_detection}};
 }
 
 }  // namespace eval

@@ -27,7 +27,9 @@
 // door: 1); for each change of a door during the drive, the latency in
 // processed clouds from the first processed cloud after the change that
 // shows the doorway (1 = that cloud's tracked_doors already holds the new
-// state: the true state, or NOT_CLOSED for a door opened from closed).
+// state: the true state, or NOT_CLOSED for a door opened from closed), and
+// from the first processed cloud whose own doors show the new state (the
+// fusion's own delay; the "within 2 processed clouds").
 // ROS-free.
 #pragma once
 
@@ -83,6 +85,10 @@ struct ChangeOutcome {
   std::string from_state, to_state;
   int first_showing = -1;                  // ordinal of the processed cloud (-1: none after the change)
   int latency = -1;                        // processed clouds, 1 = at once (-1: never shown)
+  // From the first processed cloud after the change whose own doors (the
+  // `doors` topic: that cloud alone) show the new state: the fusion's delay.
+  int first_detecting = -1;
+  int latency_from_detection = -1;
 };
 
 struct DriveEvalResult {
