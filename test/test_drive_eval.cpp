@@ -47,6 +47,9 @@ TEST(DriveEval, AToggledDoorShowsItsNewStateWithinTwoProcessedClouds) {
     ASSERT_GE(c.first_showing, 0) << "seed " << seed << ": the toggled door is never in view after its change";
     EXPECT_GE(c.latency, 1) << "seed " << seed << ": never shown\n" << describe(r);
     EXPECT_LE(c.latency, 2) << "seed " << seed << "\n" << describe(r);
+    ASSERT_GE(c.first_detecting, c.first_showing) << "seed " << seed << ": no cloud alone showed the new state";
+    EXPECT_GE(c.latency_from_detection, 1) << "seed " << seed;
+    EXPECT_LE(c.latency_from_detection, 2) << "seed " << seed << "\n" << describe(r);
     EXPECT_EQ(r.doors[c.change.door].ids, 1) << "seed " << seed << ": a state change is no new door\n" << describe(r);
   }
 }
