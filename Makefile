@@ -2,6 +2,7 @@
 #   make demo   install what is missing, build, simulate a scene, show the result
 #   make test   install what is missing, build, run every test
 # Also: make build, make bench, make eval (the README's accuracy sweeps),
+# make eval-drive (door states fused over simulated drives),
 # make clean, make sanitize (ASan+UBSan tests, part of make test), make fuzz
 # (libFuzzer targets, FUZZ_SECONDS each).
 SHELL := /bin/bash
@@ -65,6 +66,19 @@ bench: build
 # picks some); per-seed lines in $(BUILD)/eval/.
 eval: build
 	@/usr/bin/python3 $(REPO)/scripts/eval_table.py
+
+# Door states fused over simulated drives (issue 20), door_state_drive_eval
+# per sensor on DRIVE_SEEDS, plain and with a door toggled: JSON and per-drive
+# lines (with the seed) in $(BUILD)/eval-drive/.
+DRIVE_SENSORS ?= lidar64 lidar16 rgbd lidar32 lidar128
+DRIVE_SEEDS ?= 3000-3019
+.PHONY: eval-drive
+eval-drive: build
+	@mkdir -p $(BUILD)/eval-drive
+	@for s in $(DRIVE_SENSORS); do \
+	  $(BIN)/door_state_drive_eval --sensor $$s --seeds $(DRIVE_SEEDS) --verbose >$(BUILD)/eval-drive/$$s.json 2>$(BUILD)/eval-drive/$$s.log || exit 1; \
+	  $(BIN)/door_state_drive_eval --sensor $$s --seeds $(DRIVE_SEEDS) --toggle auto --verbose >$(BUILD)/eval-drive/$$s-toggle.json 2>$(BUILD)/eval-drive/$$s-toggle.log || exit 1; \
+	  echo "$$s: figures in $(BUILD)/eval-drive/$$s.json and $$s-toggle.json"; done
 
 .PHONY: latency soak
 # The nodelet's latency from cloud in (stamped at publish) to DoorStateArray

@@ -7,6 +7,8 @@ file(GLOB CORE_SOURCES CONFIGURE_DEPENDS
   ${REPO}/src/pipeline/*.cpp ${REPO}/src/preprocess/*.cpp ${REPO}/src/segmentation/*.cpp
   ${REPO}/src/recognition/*.cpp ${REPO}/src/state/*.cpp ${REPO}/src/reconstruction/*.cpp
   ${REPO}/src/tracking/*.cpp ${REPO}/src/io/*.cpp ${REPO}/src/eval/*.cpp)
+# The drive evaluation plays simulated drives: it belongs with the simulator.
+list(FILTER CORE_SOURCES EXCLUDE REGEX "/src/eval/drive_eval\\.cpp$")
 add_library(door_state_core STATIC ${CORE_SOURCES})
 target_include_directories(door_state_core PUBLIC ${CORE_INCLUDES})
 target_link_libraries(door_state_core PUBLIC ${PCL_LIBRARIES} nlohmann_json::nlohmann_json yaml-cpp)

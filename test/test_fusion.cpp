@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "door_state_recognition/tracking/door_fusion.hpp"
+#include "door_state_recognition/tracking/drive_tracker.hpp"
 
 using dsr::DoorFusion;
 using dsr::DoorResult;
@@ -287,5 +288,102 @@ TEST(ClearWidth, TheDoorwayLessWhatTheLeafTakes) {
     const double w = dsr::clearWidth(0.9, a, 0.04, 5);
     EXPECT_GE(w, last - 1e-12) << a << " deg";
     last = w;
+  }
+}
+
+// DriveTracker (tracking/drive_tracker.hpp): the relocalisation rule and the
+// pipeline's thresholds, on top of DoorFusion.
+TEST(DriveTracker, ASensorJumpBeyondMaxSpeedResetsTheTracksAndAnUnknownSensorIsNotJudged) {
+  dsr::DriveTrackerOptions o;
+  o.max_sensor_speed = 1.0;  // m/s, + 0.5 m slack
+  dsr::DriveTracker t(o);
+  dsr::PipelineResult r;
+  r.doors = {door(kA, 40)};
+  const dsr::Parameters p;
+  EXPECT_FALSE(t.fuse(r, 1.0, p, Eigen::Vector3d(0, 0, 1)).relocalised);
+  EXPECT_FALSE(t.fuse(r, 2.0, p, Eigen::Vector3d(1.4, 0, 1)).relocalised);  // 1.4 m in 1 s <= 1.5 m
+  ASSERT_EQ(t.tracks().size(), 1u);
+  const std::uint32_t id = t.tracks()[0].id;
+  EXPECT_FALSE(t.fuse(r, 3.0, p, std::nullopt).relocalised);  // no sensor: nothing to judge
+  const dsr::DriveTracker::Step s = t.fuse(r, 3.5, p, Eigen::Vector3d(1.4, 5, 1));  // 5 m in 1.5 s since the last known
+  EXPECT_TRUE(s.relocalised);
+  EXPECT_NEAR(s.moved_m, 5.0, 1e-12);
+  EXPECT_NEAR(s.dt_s, 1.5, 1e-12);
+  ASSERT_EQ(t.tracks().size(), 1u);  // the door seen in the jumping cloud starts a new track
+  EXPECT_NE(t.tracks()[0].id, id);
+  EXPECT_EQ(t.tracks()[0].observations, 1u);
+  // 0: never judged.
+  o.max_sensor_speed = 0;
+  dsr::DriveTracker never(o);
+  never.fuse(r, 1.0, p, Eigen::Vector3d::Zero());
+  EXPECT_FALSE(never.fuse(r, 1.1, p, Eigen::Vector3d(100, 0, 0)).relocalised);
+  o.max_sensor_speed = -1;
+  EXPECT_THROW(dsr::DriveTracker{o}, std::invalid_argument);
+}
+
+TEST(DriveTracker, ThePipelinesThresholdsDecideTheStatesOfBounds) {
+  dsr::DriveTracker t;
+  dsr::PipelineResult r;
+  r.doors = {door(kA, 70, true)};
+  dsr::Parameters p;
+  p.open_from_deg = 60;  // a 70 deg bound is OPEN by these thresholds
+  t.fuse(r, 1.0, p, std::nullopt);
+  ASSERT_EQ(t.tracks().size(), 1u);
+  EXPECT_EQ(t.tracks()[0].door.state, DoorStateKind::Open);
+  EXPECT_DOUBLE_EQ(t.fusion().options().open_from_deg, 60);
+}
+
+TEST(DriveTracker, RunMovesTheCloudIntoTheFixedFrame) {
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  cloud.push_back(pcl::PointXYZ(1, 0, 0));
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translate(Eigen::Vector3d(0, 2, 1)).rotate(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()));
+  const dsr::Pipeline pipeline{dsr::Parameters()};
+  const dsr::PipelineResult r = dsr::DriveTracker::run(pipeline, cloud, T, false);
+  EXPECT_NEAR(cloud[0].x, 0, 1e-6);
+  EXPECT_NEAR(cloud[0].y, 3, 1e-6);
+  EXPECT_NEAR(cloud[0].z, 1, 1e-6);
+  ASSERT_TRUE(r.viewpoint.has_value());
+  EXPECT_NEAR((*r.viewpoint - Eigen::Vector3d(0, 2, 1)).norm(), 0, 1e-12);
+  EXPECT_TRUE(r.doors.empty());
+}
+
+namespace {
+
+// A wall at x = 2 (y in [-2, 2], z from -1, the floor, to 1.5) seen from the
+// origin, every 2 cm; with `doorway`, rays through |y| < 0.45, z < 1 end on
+// a wall behind it at x = 4.
+pcl::PointCloud<pcl::PointXYZ> wallCloud(bool doorway) {
+  pcl::PointCloud<pcl::PointXYZ> c;
+  for (double y = -2; y <= 2; y += 0.02)
+    for (double z = -1; z <= 1.5; z += 0.02) {
+      const bool through = doorway && std::abs(y) < 0.45 && z < 1.0;
+      c.push_back(through ? pcl::PointXYZ(4, 2 * y, 2 * z) : pcl::PointXYZ(2, y, z));
+    }
+  return c;
+}
+
+}  // namespace
+
+TEST(DriveTracker, ADoorwayLaterSweepsMeasureAsPlainWallIsDroppedAnOpenOneIsKept) {
+  for (const bool doorway : {false, true}) {
+    dsr::DriveTrackerOptions o;
+    o.disprove = true;
+    dsr::DriveTracker t(o);
+    dsr::PipelineResult r;
+    r.doors = {door(Eigen::Vector3d(2, 0, -1), 0.0, false, 0.6, Eigen::Vector3d::UnitY())};
+    const dsr::Parameters p;
+    t.fuse(r, 1.0, p, Eigen::Vector3d::Zero());
+    ASSERT_EQ(t.tracks().size(), 1u);
+    const dsr::Pipeline pipeline{p};
+    std::size_t disproved = 0;
+    for (int k = 0; k < 3; ++k) {
+      pcl::PointCloud<pcl::PointXYZ> c = wallCloud(doorway);
+      const auto step = t.process(pipeline, c, Eigen::Isometry3d::Identity(), 2.0 + k, false);
+      disproved += step.step.disproved;
+      if (!doorway && k < 2) EXPECT_EQ(t.tracks().size(), 1u) << "dropped after " << k + 1 << " sweeps: 3 are needed";
+    }
+    EXPECT_EQ(disproved, doorway ? 0u : 1u) << (doorway ? "an open doorway" : "a plain wall");
+    EXPECT_EQ(t.tracks().size(), doorway ? 1u : 0u) << (doorway ? "an open doorway" : "a plain wall");
   }
 }

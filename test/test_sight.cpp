@@ -30,8 +30,8 @@ struct Merged {
   eval::EvalResult score(const PipelineResult& r) const { return eval::evaluate(truth, io::reportJson(r, "sim"), 0.5, true); }
 };
 
-Merged merged(std::uint64_t seed, int stations, std::size_t rays_per_station) {
-  const sim::Scene scene = sim::buildScene(sim::randomRoom(seed));
+Merged merged(std::uint64_t seed, int stations, std::size_t rays_per_station, const sim::RandomSceneOptions& room = {}) {
+  const sim::Scene scene = sim::buildScene(sim::randomRoom(seed, room));
   sim::TlsOptions o;
   o.seed = seed;
   o.viewpoints = stations;
@@ -121,6 +121,29 @@ TEST(Sight, WithoutAViewpointAMergedRoomGetsItsDoors) {
   EXPECT_GE(sum.recall(), 0.8);
   EXPECT_GE(sum.stateAccuracyMeasured(), 0.95);
   EXPECT_LE(sum.angleMaeMeasuredDeg(), 3.0);
+}
+
+TEST(Sight, WithoutAViewpointBookcasesBesideDoorsAreNoDoors) {
+  // Rooms with clutter (seeds of the tuning range), two stations merged, run
+  // without a viewpoint. A bookcase against a wall looked like a closed door:
+  // its back panel a few centimetres off the wall like a leaf, its side
+  // panels' and top's edges at the wall like trim. Its shelves and books
+  // stand 15-40 cm before the wall across its width, where nothing stands
+  // before a door (state/doors.cpp, furnishedShare). Before that rule each
+  // of these seeds reported one such false door (closed@2, semi_open@8).
+  const Pipeline pipe{Parameters()};
+  sim::RandomSceneOptions room;
+  room.clutter = true;
+  for (std::uint64_t seed : {1007ull, 1009ull, 1024ull}) {
+    const Merged m = merged(seed, 2, 200000, room);
+    const PipelineResult r = pipe.runWithoutViewpoint(m.cloud, false);
+    const eval::EvalResult e = m.score(r);
+    bool furniture = false;  // the rule was needed: a candidate turned down as furniture
+    for (const auto& t : r.trace) furniture |= t.find("(furniture)") != std::string::npos;
+    EXPECT_TRUE(furniture) << "seed " << seed;
+    EXPECT_EQ(e.unmatched_report.size(), 0u) << "seed " << seed << ": reported" << doors(r);
+    EXPECT_EQ(e.matched, e.true_doors) << "seed " << seed << ": reported" << doors(r);
+  }
 }
 
 TEST(Sight, NoViewpointOnASingleScanStillFindsItsDoors) {

@@ -45,5 +45,23 @@ inline long long toInt(const std::string& flag, const std::string& v) {
   return x;
 }
 
+// --toggle-door K:ANGLE@T (door_scene_sim, door_state_drive_eval): door K
+// is at ANGLE deg from T s after the start on.
+struct Toggle {
+  int door = 0;
+  double angle_deg = 0, t = 0;
+};
+inline Toggle toToggle(const std::string& flag, const std::string& v) {
+  const auto colon = v.find(':'), at = v.find('@');
+  if (colon == std::string::npos || at == std::string::npos || at < colon) throw UsageError(flag + " needs K:ANGLE@T");
+  Toggle c;
+  c.door = static_cast<int>(toInt(flag, v.substr(0, colon)));
+  c.angle_deg = toDouble(flag, v.substr(colon + 1, at - colon - 1));
+  c.t = toDouble(flag, v.substr(at + 1));
+  if (c.door < 0 || c.angle_deg < 0 || c.angle_deg > 180 || c.t < 0)
+    throw UsageError(flag + " needs K >= 0, ANGLE in [0, 180] and T >= 0");
+  return c;
+}
+
 }  // namespace tools
 }  // namespace dsr

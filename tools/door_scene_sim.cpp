@@ -275,16 +275,8 @@ int main(int argc, char** argv) {
         drive_options.rate_hz = toDouble(a, value());
         if (!(drive_options.rate_hz > 0 && drive_options.rate_hz <= 100)) throw UsageError("--rate must lie in (0, 100] Hz");
       } else if (a == "--toggle-door") {
-        const std::string v = value();
-        const auto colon = v.find(':'), at = v.find('@');
-        if (colon == std::string::npos || at == std::string::npos || at < colon) throw UsageError("--toggle-door needs K:ANGLE@T");
-        sim::DoorChange c;
-        c.door = static_cast<int>(toInt(a, v.substr(0, colon)));
-        c.angle_deg = toDouble(a, v.substr(colon + 1, at - colon - 1));
-        c.t = toDouble(a, v.substr(at + 1));
-        if (c.door < 0 || c.angle_deg < 0 || c.angle_deg > 180 || c.t < 0)
-          throw UsageError("--toggle-door needs K >= 0, ANGLE in [0, 180] and T >= 0");
-        drive_options.changes.push_back(c);
+        const dsr::tools::Toggle c = dsr::tools::toToggle(a, value());
+        drive_options.changes.push_back({c.door, c.angle_deg, c.t});
       } else if (a == "--pass-distance") {
         drive_options.door_distance = toDouble(a, value());
         if (drive_options.door_distance < 1 || drive_options.door_distance > 3) throw UsageError("--pass-distance must lie in [1, 3] m");

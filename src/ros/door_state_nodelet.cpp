@@ -14,8 +14,9 @@
 // `reconstructed_walls` (PointCloud2). With ~fixed_frame set, also
 // `tracked_doors` (DoorStateArray in the fixed frame, with every processed
 // cloud): every door seen within ~forget_after_s (s, default 300), each with
-// one id and its best estimate over the drive (dsr::DoorFusion, whose header
-// gives the rules; ~state_change_deg, default 20, is its state change); a
+// one id and its best estimate over the drive (dsr::DriveTracker around
+// dsr::DoorFusion, whose headers give the rules; ~state_change_deg, default
+// 20, is its state change); a
 // door the cloud shows has last_seen equal to the header's stamp. Stamps
 // going back by more than 1 s (a bag looped) reset the tracks, older clouds
 // within 1 s are not fused; the sensor moving in the fixed frame faster than
@@ -65,6 +66,7 @@
 #include "door_state_recognition/ros/markers.hpp"
 #include "door_state_recognition/tracking/door_fusion.hpp"
 #include "door_state_recognition/tracking/door_tracker.hpp"
+#include "door_state_recognition/tracking/drive_tracker.hpp"
 
 namespace door_state_recognition {
 
@@ -384,11 +386,11 @@ class DoorStateNodelet : public nodelet::Nodelet {
     pnh_.param("tf_queue_size", tf_queue_size_, 5);
     if (tf_queue_size_ < 1) tf_queue_size_ = 1;
     {
-      dsr::FusionOptions fo;
-      pnh_.param("forget_after_s", fo.forget_after_s, fo.forget_after_s);
-      pnh_.param("state_change_deg", fo.state_change_deg, fo.state_change_deg);
-      pnh_.param("max_sensor_speed", max_sensor_speed_, max_sensor_speed_);
-      fusion_ = dsr::DoorFusion(fo);  // checked above: cannot throw
+      dsr::DriveTrackerOptions o;
+      pnh_.param("forget_after_s", o.fusion.forget_after_s, o.fusion.forget_after_s);
+      pnh_.param("state_change_deg", o.fusion.state_change_deg, o.fusion.state_change_deg);
+      pnh_.param("max_sensor_speed", o.max_sensor_speed, o.max_sensor_speed);
+      drive_ = dsr::DriveTracker(o);  // checked above: cannot throw
     }
     pipeline_ = std::make_shared<const dsr::Pipeline>(params_);
     last_good_config_ = DoorStateConfig::__getDefault__();
@@ -623,18 +625,23 @@ class DoorStateNodelet : public nodelet::Nodelet {
     // is done in place.
     dsr::ros_io::toPcl(*msg, cloud_);
     std_msgs::Header out_header = msg->header;
-    Eigen::Vector3d viewpoint = Eigen::Vector3d::Zero();
+    std::optional<Eigen::Isometry3d> to_fixed;  // none: the cloud is in the fixed frame (or none is set)
     if (!fixed_frame_.empty() && msg->header.frame_id != fixed_frame_) {
-      const Eigen::Isometry3d T =
-          tf2::transformToEigen(tf_buffer_->lookupTransform(fixed_frame_, msg->header.frame_id, msg->header.stamp));
-      const Eigen::Matrix3f R = T.linear().cast<float>();
-      const Eigen::Vector3f t = T.translation().cast<float>();
-      for (auto& p : cloud_.points) p.getVector3fMap() = R * p.getVector3fMap() + t;
-      viewpoint = T.translation();
+      to_fixed = tf2::transformToEigen(tf_buffer_->lookupTransform(fixed_frame_, msg->header.frame_id, msg->header.stamp));
       out_header.frame_id = fixed_frame_;
     }
-    const dsr::PipelineResult result =
-        without_viewpoint_ ? pipeline->runWithoutViewpoint(cloud_, wantWalls()) : pipeline->run(cloud_, wantWalls(), viewpoint);
+    // With a fixed frame, dsr::DriveTracker moves the cloud, runs the
+    // pipeline and fuses its doors; without, the cloud's doors only.
+    std::optional<dsr::DriveTracker::Step> step;
+    dsr::PipelineResult result;
+    if (fixed_frame_.empty()) {
+      result = dsr::DriveTracker::run(*pipeline, cloud_, std::nullopt, wantWalls(), without_viewpoint_);
+    } else {
+      dsr::DriveTracker::Processed p =
+          drive_.process(*pipeline, cloud_, to_fixed, msg->header.stamp.toSec(), wantWalls(), without_viewpoint_);
+      result = std::move(p.result);
+      step = p.step;
+    }
     if (!result.warnings.empty()) {
       std::string all;
       for (const auto& w : result.warnings) all += (all.empty() ? "" : "; ") + w;
@@ -650,8 +657,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
         NODELET_DEBUG_THROTTLE(5.0, "door_state: %s", all.c_str());
       }
     }
-    publish(result, out_header, pipeline->parameters(),
-            msg->header.frame_id != fixed_frame_ ? std::optional<Eigen::Vector3d>(viewpoint) : std::nullopt);
+    publish(result, out_header, step);
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     const double in_node_ms = (ros::WallTime::now() - received).toSec() * 1e3;
     const double age_ms = (ros::Time::now() - msg->header.stamp).toSec() * 1e3;
@@ -690,56 +696,37 @@ class DoorStateNodelet : public nodelet::Nodelet {
     return s;
   }
 
-  // The cloud's doors into the fused tracks (fixed frame only); a warning
-  // (throttled) when the stamps went backwards or out of order.
-  void fuse(const dsr::PipelineResult& r, const std_msgs::Header& header, const dsr::Parameters& params,
-            const std::optional<Eigen::Vector3d>& sensor) {
-    // A relocalisation: the sensor's position in the fixed frame moved
-    // between two processed clouds by more than ~max_sensor_speed allows
-    // (plus kJumpSlack): the doors tracked before and those seen now are not
-    // in one frame any more; the tracks are reset (throttled warning). Not
-    // judged when the clouds arrive in the fixed frame (sensor unknown), nor
-    // across stamps going backwards (DoorFusion resets then anyway).
-    constexpr double kJumpSlack = 0.5;  // m
-    const double stamp = header.stamp.toSec();
-    if (sensor && last_sensor_ && max_sensor_speed_ > 0 && stamp >= last_sensor_stamp_) {
-      const double moved = (*sensor - *last_sensor_).norm();
-      const double allowed = kJumpSlack + max_sensor_speed_ * (stamp - last_sensor_stamp_);
-      if (moved > allowed) {
-        ++relocalisations_;
-        NODELET_WARN_THROTTLE(5.0, "door_state: the sensor moved %.2f m in the fixed frame '%s' in %.3f s (more than "
-                                   "~max_sensor_speed %.2f m/s allows): relocalisation; tracked_doors reset",
-                              moved, fixed_frame_.c_str(), stamp - last_sensor_stamp_, max_sensor_speed_);
-        noteError("relocalisation jump: tracked doors reset");
-        fusion_.reset();
-      }
+  // tracked_doors after the cloud's doors went into the fused tracks (fixed
+  // frame only); a warning (throttled) for a relocalisation jump (tracks
+  // reset), stamps going backwards (reset) or out of order (not fused).
+  void publishTracked(const dsr::DriveTracker::Step& step, const std_msgs::Header& header) {
+    const double stamp = header.stamp.toSec(), newest = step.newest_before;
+    if (step.relocalised) {
+      ++relocalisations_;
+      NODELET_WARN_THROTTLE(5.0, "door_state: the sensor moved %.2f m in the fixed frame '%s' in %.3f s (more than "
+                                 "~max_sensor_speed %.2f m/s allows): relocalisation; tracked_doors reset",
+                            step.moved_m, fixed_frame_.c_str(), step.dt_s, drive_.options().max_sensor_speed);
+      noteError("relocalisation jump: tracked doors reset");
     }
-    if (sensor) {
-      last_sensor_ = sensor;
-      last_sensor_stamp_ = stamp;
-    }
-    dsr::FusionOptions fo = fusion_.options();
-    fo.closed_below_deg = params.closed_below_deg;
-    fo.open_from_deg = params.open_from_deg;
-    fo.leaf_thickness = params.leaf_thickness;
-    fusion_.setOptions(fo);  // the pipeline's thresholds, validated with it
-    const double newest = fusion_.newestStamp();
-    const dsr::DoorFusion::Update u = fusion_.update(r.doors, header.stamp.toSec(), r.up);
-    if (u.outcome == dsr::DoorFusion::Outcome::Reset) {
+    if (step.disproved > 0)
+      NODELET_DEBUG_THROTTLE(5.0, "door_state: %zu tracked door(s) dropped: their doorway measured as wall",
+                             step.disproved);
+    disproved_ += step.disproved;
+    if (step.fusion.outcome == dsr::DoorFusion::Outcome::Reset) {
       ++fusion_resets_;
       NODELET_WARN_THROTTLE(5.0, "door_state: cloud stamped %.3f is %.3f s older than the newest fused (%.3f): "
                                  "time went backwards (bag looped?); tracked_doors reset",
-                            header.stamp.toSec(), newest - header.stamp.toSec(), newest);
+                            stamp, newest - stamp, newest);
       noteError("time went backwards: tracked doors reset");
-    } else if (u.outcome == dsr::DoorFusion::Outcome::IgnoredOutOfOrder) {
+    } else if (step.fusion.outcome == dsr::DoorFusion::Outcome::IgnoredOutOfOrder) {
       ++fusion_ignored_;
       NODELET_WARN_THROTTLE(5.0, "door_state: cloud stamped %.3f is older than the newest fused (%.3f): "
                                  "published in doors, not fused into tracked_doors",
-                            header.stamp.toSec(), newest);
+                            stamp, newest);
     }
     DoorStateArrayPtr tracked = boost::make_shared<DoorStateArray>();
     tracked->header = header;
-    for (const dsr::TrackedDoor& t : fusion_.tracks()) {
+    for (const dsr::TrackedDoor& t : drive_.tracks()) {
       ros::Time seen = header.stamp;  // exactly the header's for a door this cloud shows
       if (!t.seen_now) seen.fromSec(std::max(0.0, t.last_seen));
       tracked->doors.push_back(toMsg(t.door, t.id, seen, t.observations));
@@ -748,9 +735,9 @@ class DoorStateNodelet : public nodelet::Nodelet {
     pub_tracked_.publish(tracked);
   }
 
-  // `sensor`: where the sensor was in the fixed frame (none: not known).
-  void publish(const dsr::PipelineResult& r, const std_msgs::Header& header, const dsr::Parameters& params,
-               const std::optional<Eigen::Vector3d>& sensor = std::nullopt) {
+  // `step`: the fusion of this cloud (fixed frame only).
+  void publish(const dsr::PipelineResult& r, const std_msgs::Header& header,
+               const std::optional<dsr::DriveTracker::Step>& step = std::nullopt) {
     std::vector<Eigen::Vector3d> centres;
     for (const auto& d : r.doors) centres.push_back(d.opening_center);
     // Matched across the pipeline's up vector (-y in a camera optical frame).
@@ -760,10 +747,10 @@ class DoorStateNodelet : public nodelet::Nodelet {
     out->header = header;
     for (std::size_t i = 0; i < r.doors.size(); ++i) out->doors.push_back(toMsg(r.doors[i], ids[i], header.stamp, 1));
     pub_doors_.publish(out);
-    if (!fixed_frame_.empty()) fuse(r, header, params, sensor);
+    if (step) publishTracked(*step, header);
     if (pub_markers_.getNumSubscribers() > 0) {
       auto markers = boost::make_shared<visualization_msgs::MarkerArray>(dsr::ros_io::makeMarkers(r, ids, header));
-      if (!fixed_frame_.empty()) dsr::ros_io::addTrackedMarkers(fusion_.tracks(), header, *markers);
+      if (!fixed_frame_.empty()) dsr::ros_io::addTrackedMarkers(drive_.tracks(), header, *markers);
       pub_markers_.publish(markers);
     }
     if (pub_walls_.getNumSubscribers() > 0) {
@@ -837,6 +824,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
       stat.add("tracked doors reset (time went backwards)", fusion_resets_.load());
       stat.add("clouds not fused (out of order)", fusion_ignored_.load());
       stat.add("tracked doors reset (relocalisation)", relocalisations_.load());
+      stat.add("tracked doors dropped (doorway measured as wall)", disproved_.load());
     }
   }
 
@@ -861,11 +849,8 @@ class DoorStateNodelet : public nodelet::Nodelet {
   std::string last_refusal_;
   ros::WallTime last_refusal_time_;
   dsr::DoorTracker tracker_;                        // worker only
-  dsr::DoorFusion fusion_;                          // worker only (fixed frame)
-  std::atomic<unsigned long> fusion_resets_{0}, fusion_ignored_{0}, relocalisations_{0};
-  double max_sensor_speed_ = 3.0;                   // m/s, ~max_sensor_speed
-  std::optional<Eigen::Vector3d> last_sensor_;      // worker only
-  double last_sensor_stamp_ = 0;
+  dsr::DriveTracker drive_;                         // worker only (fixed frame): ~forget_after_s, ~state_change_deg, ~max_sensor_speed
+  std::atomic<unsigned long> fusion_resets_{0}, fusion_ignored_{0}, relocalisations_{0}, disproved_{0};
   std::atomic<std::size_t> tracked_count_{0};
   pcl::PointCloud<pcl::PointXYZ> cloud_;            // worker only, reused between clouds
   // The one-cloud slot between the subscriber callback and the worker.

@@ -82,6 +82,54 @@ Foot footOf(const segmentation::Points& pts, const segmentation::WallPlane& wall
   return f;
 }
 
+// What stands before a doorway, its own leaf aside. A doorway is kept clear
+// to pass through, and a door's leaf closes it flush with the wall or
+// recessed in it, never 20-40 cm before it; a door's trim is 1-3 cm proud and
+// its handle some 7 cm. Furniture against a wall (a bookcase, a cupboard)
+// shows just that before its back or the wall: its side panels, shelves,
+// books or front stand kBeforeMin-kBeforeMax out of the wall across its whole
+// width at body height, while its back panel (a few cm off the wall) and its
+// side panels' edges look like a closed leaf with trim. The share of the
+// leaf's width, in 5 cm columns between its jambs, in which at least
+// kBeforeRows rows 10 cm high of the body (0.3-1.75 m) hold points
+// kBeforeMin-kBeforeMax before the wall's face and farther than kOffLeaf
+// from the leaf (a leaf swung towards the room stands there itself).
+constexpr double kBeforeMin = 0.12, kBeforeMax = 0.7, kOffLeaf = 0.08;
+constexpr int kBeforeRows = 2;
+// A doorway this share of whose width something stands before is furniture.
+constexpr double kFurnishedShare = 0.5;
+double furnishedShare(const segmentation::Points& pts, const segmentation::WallPlane& wall, const LeafFit& leaf,
+                      double floor_z) {
+  const double a = std::min(leaf.s_hinge, leaf.s_latch) + 0.05, b = std::max(leaf.s_hinge, leaf.s_latch) - 0.05;
+  if (b <= a) return 0;
+  constexpr double kBody0 = 0.3, kBody1 = 1.75, kCol = 0.05, kRow = 0.1;
+  const int cols = std::max(1, static_cast<int>((b - a) / kCol));
+  const int rows = static_cast<int>(std::lround((kBody1 - kBody0) / kRow));
+  std::vector<char> cell(static_cast<std::size_t>(cols) * rows, 0);
+  const Eigen::Vector2d h = leaf.hinge, dir = leaf.direction;
+  for (const auto& q : pts) {
+    const double z = q.z() - floor_z;
+    if (z < kBody0 || z >= kBody1) continue;
+    const double d = wall.signedDistance(q);
+    if (d < kBeforeMin || d > kBeforeMax) continue;
+    const double s = wall.along(q);
+    if (s <= a || s >= b) continue;
+    const Eigen::Vector2d xy(q.x(), q.y());
+    const double t = std::clamp((xy - h).dot(dir), 0.0, leaf.length);
+    if ((xy - (h + t * dir)).norm() < kOffLeaf) continue;
+    const int c = std::min(cols - 1, static_cast<int>((s - a) / kCol));
+    const int r = std::min(rows - 1, static_cast<int>((z - kBody0) / kRow));
+    cell[static_cast<std::size_t>(r) * cols + c] = 1;
+  }
+  int furnished = 0;
+  for (int c = 0; c < cols; ++c) {
+    int n = 0;
+    for (int r = 0; r < rows; ++r) n += cell[static_cast<std::size_t>(r) * cols + c];
+    furnished += n >= kBeforeRows;
+  }
+  return static_cast<double>(furnished) / cols;
+}
+
 // Could what hides a doorway be its own leaf, swung towards the sensor? A
 // cheap look before the leaf search: the points in front of the wall whose
 // sight lines meet the wall inside the doorway (body height) must lie on one
@@ -255,6 +303,12 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       // front of it is a blocked front, not a door.
       const Foot foot = closed ? footOf(pts, wall, leaf, floor_z, p.leaf_thickness, p.face_tolerance) : Foot{1, 0};
       const bool free_foot = foot.seen >= 0.3 || foot.blocked < 0.5;
+      // Something standing before the doorway across its width: furniture
+      // against the wall, not a door (see furnishedShare). A pass over the
+      // points: only where nothing else has turned the doorway down yet
+      // (-1 in the trace: not looked at).
+      const double furnished = open_unseen || !evidence || !free_foot ? -1.0 : furnishedShare(pts, wall, leaf, floor_z);
+      const bool clear_way = furnished < kFurnishedShare;
       const double height = (std::isfinite(d.top) ? d.top : leaf.top_z) - floor_z;
       const double wall_h = top_z - floor_z;
       // The paper's ratio to the room's height needs the ceiling: without it
@@ -273,17 +327,18 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
         std::snprintf(buf, sizeof buf,
                       "wall %zu: doorway s=[%.2f, %.2f] casing=%d face=%.2f through=%.2f front=%.2f recess=%.2f "
                       "setback=%.2f top=%.2f thick=%.2f | leaf found=%d band=%d angle=%.1f cov=%.2f explains=%.2f "
-                      "foot=%.2f/%.2f hinge_s0=%d toward=%d handle=%d | %s",
+                      "foot=%.2f/%.2f furnished=%.2f hinge_s0=%d toward=%d handle=%d | %s",
                       wi, d.s0, d.s1, d.casing, d.face, d.through, d.front, d.recess, d.set_back, d.top - floor_z,
                       d.thickness, leaf.found, leaf.closed_in_band, leaf.angle_deg, leaf.coverage, leaf.occluders_explained,
-                      foot.seen, foot.blocked, leaf.hinge_at_s0, leaf.toward_viewer, leaf.handle_points,
+                      foot.seen, foot.blocked, furnished, leaf.hinge_at_s0, leaf.toward_viewer, leaf.handle_points,
                       !evidence ? "rejected: no casing, recess, see-through or own leaf hiding it"
                       : !free_foot ? "rejected: foot hidden by something right in front"
+                      : !clear_way ? "rejected: something stands before it across its width (furniture)"
                       : !tall ? "rejected: too low" : !wide ? "rejected: width"
                       : !own_wall ? "rejected: its wall is another door's leaf" : "door");
         out.trace.push_back(buf);
       }
-      if (!evidence || !free_foot || !tall || !wide || !own_wall) continue;
+      if (!evidence || !free_foot || !clear_way || !tall || !wide || !own_wall) continue;
 
       DoorResult door;
       door.wall_id = static_cast<int>(wi);

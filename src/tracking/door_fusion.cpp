@@ -68,6 +68,16 @@ void DoorFusion::setOptions(const FusionOptions& options) {
   options_ = options;
 }
 
+bool DoorFusion::drop(std::uint32_t id) {
+  for (std::size_t k = 0; k < tracks_.size(); ++k)
+    if (tracks_[k].id == id) {
+      tracks_.erase(tracks_.begin() + static_cast<std::ptrdiff_t>(k));
+      internal_.erase(internal_.begin() + static_cast<std::ptrdiff_t>(k));
+      return true;
+    }
+  return false;
+}
+
 void DoorFusion::reset() {
   tracks_.clear();
   internal_.clear();

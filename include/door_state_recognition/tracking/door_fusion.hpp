@@ -113,6 +113,9 @@ class DoorFusion {
   const std::vector<TrackedDoor>& tracks() const { return tracks_; }
   // Drops every track (ids go on counting).
   void reset();
+  // Drops the track `id` (e.g. its doorway since measured as plain wall:
+  // DriveTracker); false when there is none.
+  bool drop(std::uint32_t id);
   // The newest stamp fused (NaN before the first cloud and after reset()).
   double newestStamp() const { return newest_; }
 

@@ -1,0 +1,147 @@
+#include "door_state_recognition/tracking/drive_tracker.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace dsr {
+
+void DriveTrackerOptions::validate() const {
+  fusion.validate();
+  if (!(max_sensor_speed >= 0) || !std::isfinite(max_sensor_speed))
+    throw std::invalid_argument("max_sensor_speed must be a finite number of m/s >= 0 (0: no relocalisation check)");
+  if (!(jump_slack_m >= 0) || !std::isfinite(jump_slack_m))
+    throw std::invalid_argument("jump_slack_m must be a finite number of metres >= 0");
+}
+
+DriveTracker::DriveTracker(const DriveTrackerOptions& options) : options_(options), fusion_(options.fusion) {
+  options_.validate();
+}
+
+PipelineResult DriveTracker::run(const Pipeline& pipeline, pcl::PointCloud<pcl::PointXYZ>& cloud,
+                                 const std::optional<Eigen::Isometry3d>& sensor_to_fixed, bool with_reconstruction,
+                                 bool without_viewpoint) {
+  Eigen::Vector3d viewpoint = Eigen::Vector3d::Zero();
+  if (sensor_to_fixed) {
+    const Eigen::Matrix3f R = sensor_to_fixed->linear().cast<float>();
+    const Eigen::Vector3f t = sensor_to_fixed->translation().cast<float>();
+    for (auto& p : cloud.points) p.getVector3fMap() = R * p.getVector3fMap() + t;
+    viewpoint = sensor_to_fixed->translation();
+  }
+  return without_viewpoint ? pipeline.runWithoutViewpoint(cloud, with_reconstruction)
+                           : pipeline.run(cloud, with_reconstruction, viewpoint);
+}
+
+DriveTracker::Step DriveTracker::fuse(const PipelineResult& result, double stamp, const Parameters& params,
+                                      const std::optional<Eigen::Vector3d>& sensor) {
+  Step s;
+  if (sensor && last_sensor_ && options_.max_sensor_speed > 0 && stamp >= last_sensor_stamp_) {
+    s.moved_m = (*sensor - *last_sensor_).norm();
+    s.dt_s = stamp - last_sensor_stamp_;
+    if (s.moved_m > options_.jump_slack_m + options_.max_sensor_speed * s.dt_s) {
+      s.relocalised = true;
+      fusion_.reset();
+    }
+  }
+  if (sensor && std::isfinite(stamp)) {
+    last_sensor_ = sensor;
+    last_sensor_stamp_ = stamp;
+  }
+  FusionOptions fo = fusion_.options();
+  fo.closed_below_deg = params.closed_below_deg;
+  fo.open_from_deg = params.open_from_deg;
+  fo.leaf_thickness = params.leaf_thickness;
+  fusion_.setOptions(fo);  // the pipeline's thresholds, validated with it
+  s.newest_before = fusion_.newestStamp();
+  s.fusion = fusion_.update(result.doors, stamp, result.up);
+  return s;
+}
+
+DriveTracker::Processed DriveTracker::process(const Pipeline& pipeline, pcl::PointCloud<pcl::PointXYZ>& cloud,
+                                              const std::optional<Eigen::Isometry3d>& sensor_to_fixed, double stamp,
+                                              bool with_reconstruction, bool without_viewpoint) {
+  Processed p;
+  p.result = run(pipeline, cloud, sensor_to_fixed, with_reconstruction, without_viewpoint);
+  std::optional<Eigen::Vector3d> sensor;
+  if (sensor_to_fixed) sensor = sensor_to_fixed->translation();
+  p.step = fuse(p.result, stamp, pipeline.parameters(), sensor);
+  if (options_.disprove && sensor && p.step.fusion.outcome == DoorFusion::Outcome::Fused)
+    p.step.disproved = disprove(cloud, *sensor);
+  return p;
+}
+
+namespace {
+
+constexpr double kDisproveRange = 4.0;  // m, sensor to opening centre, horizontal
+constexpr double kOnPlane = 0.05;       // m
+constexpr int kMinRays = 30;
+constexpr double kWallShare = 0.7;
+constexpr int kMinMisses = 3;
+constexpr double kMissRatio = 3.0;
+
+// The doorway of a track as a rectangle on its wall's plane.
+struct Doorway {
+  std::uint32_t id;
+  Eigen::Vector2d q, n, e;  // a point of the plane, its unit normal, along the wall (horizontal)
+  double centre, half, floor;
+  int wall = 0, through = 0;
+};
+
+}  // namespace
+
+std::size_t DriveTracker::disprove(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vector3d& sensor) {
+  std::vector<Doorway> ds;
+  const Eigen::Vector2d s2 = sensor.head<2>();
+  for (const TrackedDoor& t : fusion_.tracks()) {
+    const DoorResult& d = t.door;
+    if (t.seen_now || !d.opening_center.allFinite() || (d.opening_center.head<2>() - s2).norm() > kDisproveRange) continue;
+    Eigen::Vector2d n = d.wall_normal.head<2>();
+    if (!(n.norm() > 0.5) || !d.wall_line_point.allFinite() || !(d.width > 0.3)) continue;
+    n.normalize();
+    Doorway w{t.id, d.wall_line_point.head<2>(), n, Eigen::Vector2d(-n.y(), n.x()), 0, 0.4 * d.width, d.opening_center.z()};
+    w.centre = (d.opening_center.head<2>() - w.q).dot(w.e);
+    if (std::abs((s2 - w.q).dot(w.n)) < 0.2) continue;  // the sensor in the wall's plane: no sight across it
+    ds.push_back(w);
+  }
+  if (ds.empty()) return 0;
+  for (const auto& p : cloud.points) {
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+    const Eigen::Vector3d P(p.x, p.y, p.z);
+    for (Doorway& w : ds) {
+      const double dsn = (s2 - w.q).dot(w.n), dpn = (P.head<2>() - w.q).dot(w.n);
+      const bool on = std::abs(dpn) <= kOnPlane;
+      if (!on && (dsn > 0) == (dpn > 0)) continue;  // ended before the plane
+      const double lambda = on ? 1.0 : dsn / (dsn - dpn);
+      const Eigen::Vector3d x = sensor + lambda * (P - sensor);
+      const double along = (x.head<2>() - w.q).dot(w.e) - w.centre, h = x.z() - w.floor;
+      if (std::abs(along) > w.half || h < 0.3 || h > 1.8) continue;
+      ++(on ? w.wall : w.through);
+    }
+  }
+  for (auto it = misses_.begin(); it != misses_.end();) {  // forget the tracks gone (forgotten, joined)
+    bool alive = false;
+    for (const TrackedDoor& t : fusion_.tracks()) alive = alive || t.id == it->first;
+    it = alive ? std::next(it) : misses_.erase(it);
+  }
+  std::size_t dropped = 0;
+  for (const Doorway& w : ds) {
+    if (w.wall < kMinRays || w.wall < kWallShare * (w.wall + w.through)) continue;
+    const int m = ++misses_[w.id];
+    std::uint32_t obs = 0;
+    for (const TrackedDoor& t : fusion_.tracks())
+      if (t.id == w.id) obs = t.observations;
+    if (m >= kMinMisses && m >= kMissRatio * obs && fusion_.drop(w.id)) {
+      misses_.erase(w.id);
+      ++dropped;
+    }
+  }
+  return dropped;
+}
+
+void DriveTracker::reset() {
+  misses_.clear();
+  fusion_.reset();
+  last_sensor_.reset();
+}
+
+}  // namespace dsr
