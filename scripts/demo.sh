@@ -3,6 +3,8 @@
 # them from the file (door_state_cli) and through the nodelet (a rosbag played
 # by bag_playback.launch), print each against the truth with a line saying
 # why for any door missed or reported as a bound, and write a plan (SVG).
+# Then a robot's drive (door_scene_sim --drive) played through
+# door_state.launch: the last tracked_doors against the truth.
 #
 # The scene: a random room of DEMO_SEED with three doors (--doors 3:3). The
 # seed was picked, among the first seeds of that kind, as one where the three
@@ -61,7 +63,32 @@ for _ in $(seq 1 60); do rosnode list >/dev/null 2>&1 && break; sleep 0.5; done 
 /usr/bin/python3 "$REPO/scripts/demo_listener.py" "$PREFIX.json" 2
 echo "   (a door not found here is missed for the reason given above: the nodelet runs the same pipeline)"
 echo "   (nodelet log: $OUT/roslaunch.log)"
-# (Integrator: once the robot drive lands, a short drive here: door_scene_sim
-# --drive writes a bag, bag_playback.launch plays it, and the listener prints
-# tracked_doors against the truth.)
+kill -INT $LAUNCH_PID 2>/dev/null; wait $LAUNCH_PID 2>/dev/null || true
+trap - EXIT
+
+if [ "${DEMO_DRIVE:-1}" != 0 ]; then
+  DRIVE_SEED="${DEMO_DRIVE_SEED:-14}"
+  echo "== a robot's drive (seed $DRIVE_SEED): a 64-beam LiDAR on a mast passes three doors, 4 sweeps/s (door_scene_sim --drive)"
+  "$BIN/door_scene_sim" --quiet --drive --sensor lidar64 --seed "$DRIVE_SEED" --doors 3:3 --rate 4 --out "$OUT/drive"
+  echo "   wrote $OUT/drive.bag (/points in the sensor frame, /tf map -> base_link -> sensor, /clock) and the truth $OUT/drive.json (in map)"
+  echo "== the bag played through door_state.launch fixed_frame:=map (use_sim_time; the bag brings its own /clock)"
+  DRIVE_PORT=$((PORT + 1))
+  export ROS_MASTER_URI="http://localhost:$DRIVE_PORT"
+  roscore -p "$DRIVE_PORT" > "$OUT/drive_roscore.log" 2>&1 &
+  CORE_PID=$!
+  trap 'kill -INT $DRIVE_LAUNCH_PID 2>/dev/null; sleep 2; kill $CORE_PID 2>/dev/null || true' EXIT
+  DRIVE_LAUNCH_PID=
+  for _ in $(seq 1 60); do rosparam list >/dev/null 2>&1 && break; sleep 0.5; done
+  rosparam set /use_sim_time true
+  roslaunch door_state_recognition door_state.launch points:=/points fixed_frame:=map > "$OUT/drive_roslaunch.log" 2>&1 &
+  DRIVE_LAUNCH_PID=$!
+  sleep 4   # the nodelet up and subscribed
+  /usr/bin/python3 "$REPO/scripts/demo_drive_listener.py" "$OUT/drive.json" 8 &
+  LISTENER_PID=$!
+  rosbag play -q "$OUT/drive.bag" > "$OUT/drive_play.log" 2>&1
+  wait $LISTENER_PID || true
+  echo "   (doors seen in a cloud or two that are not there are the drive's known failure: doc/results.md, Drives)"
+  echo "   (nodelet log: $OUT/drive_roslaunch.log; the bag, $(du -h "$OUT/drive.bag" | cut -f1), is deleted: DEMO_DRIVE=0 skips this part)"
+  rm -f "$OUT/drive.bag"
+fi
 echo "== plan of the scene: $OUT/plan.svg"
