@@ -3,6 +3,7 @@
 //   direct  the nodelet works in the cloud's frame (~fixed_frame empty)
 //   tf      the nodelet works in the fixed frame `map`
 //   bag     a simulated bag is played by rosbag; ~truth is its ground truth
+//   drive   a simulated drive played through door_state.launch; ~truth its truth
 //   bad_params  /door_state was given bad ~ parameters, /door_state_good good ones
 //   map     the nodelet has ~viewpoint none and ~fixed_frame map: a registered cloud in `map`
 #include <gtest/gtest.h>
@@ -866,6 +867,71 @@ TEST(BagPlayback, DoorsOfThePlayedBagMatchItsTruth) {
   ASSERT_FALSE(rx.doors[0].doors.empty());
   ASSERT_FALSE(rx.doors[1].doors.empty());
   EXPECT_EQ(rx.doors[0].doors[0].id, rx.doors[1].doors[0].id);
+}
+
+// A robot's drive (door_scene_sim --drive, its truth in `map`) played through
+// door_state.launch with use_sim_time (drive_playback.test): the last
+// tracked_doors holds every door the robot passed within 3 m in its true
+// state, the angle within 5 deg, and each door kept one id over the drive.
+TEST(DrivePlayback, TrackedDoorsOfTheDriveMatchItsTruth) {
+  if (g_mode != "drive") GTEST_SKIP();
+  ros::NodeHandle nh, pnh("~");
+  std::string truth_path;
+  ASSERT_TRUE(pnh.getParam("truth", truth_path));
+  std::ifstream in(truth_path);
+  ASSERT_TRUE(in.good()) << truth_path;
+  const nlohmann::json truth = nlohmann::json::parse(in);
+  Received rx;
+  ros::WallTime last_at;
+  ros::Subscriber sub =
+      nh.subscribe<DoorStateArray>("tracked_doors", 50, [&](const door_state_recognition::DoorStateArrayConstPtr& m) {
+        std::lock_guard<std::mutex> l(rx.m);
+        rx.doors.push_back(*m);
+        last_at = ros::WallTime::now();
+      });
+  // The bag is over when no message has come for 10 s (wall clock: the
+  // simulated clock stops with the bag).
+  ASSERT_TRUE(waitFor([&] { return rx.count() > 0; }, 120.0)) << "no tracked_doors from the drive";
+  ASSERT_TRUE(waitFor(
+      [&] {
+        std::lock_guard<std::mutex> l(rx.m);
+        return (ros::WallTime::now() - last_at).toSec() > 10.0;
+      },
+      240.0));
+  std::lock_guard<std::mutex> l(rx.m);
+  const DoorStateArray& last = rx.doors.back();
+  EXPECT_EQ(last.header.frame_id, "map");
+  static const char* kStates[] = {"closed", "semi_open", "open", "not_closed"};
+  const auto nearest = [](const DoorStateArray& msg, const nlohmann::json& t) -> const door_state_recognition::DoorState* {
+    const door_state_recognition::DoorState* best = nullptr;
+    double best_d = 0.5;
+    for (const auto& d : msg.doors) {
+      const double dist = std::hypot(d.opening_center.x - t["opening_center"][0].get<double>(),
+                                     d.opening_center.y - t["opening_center"][1].get<double>());
+      if (dist < best_d) best_d = dist, best = &d;
+    }
+    return best;
+  };
+  int passed = 0;
+  for (std::size_t i = 0; i < truth["doors"].size(); ++i) {
+    const auto& t = truth["doors"][i];
+    if (!t.value("passed_within_3m", false)) continue;
+    ++passed;
+    SCOPED_TRACE("door " + std::to_string(i) + ": " + t["state"].get<std::string>() + " " +
+                 std::to_string(t["opening_angle_deg"].get<double>()) + " deg");
+    const door_state_recognition::DoorState* d = nearest(last, t);
+    ASSERT_NE(d, nullptr) << "not in the last tracked_doors (" << last.doors.size() << " doors)";
+    ASSERT_LT(d->state, 4);
+    EXPECT_EQ(std::string(kStates[d->state]), t["state"].get<std::string>());
+    EXPECT_NEAR(d->opening_angle * 180.0 / M_PI, t["opening_angle_deg"].get<double>(), 5.0);
+    EXPECT_GE(d->observations, 2u);
+    // One id per door over the whole drive.
+    std::set<std::uint32_t> ids;
+    for (const auto& msg : rx.doors)
+      if (const auto* e = nearest(msg, t)) ids.insert(e->id);
+    EXPECT_EQ(ids.size(), 1u) << "the door changed id during the drive";
+  }
+  EXPECT_GT(passed, 0) << "the drive passed no door: the test proves nothing";
 }
 
 int main(int argc, char** argv) {
