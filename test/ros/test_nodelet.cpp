@@ -870,9 +870,11 @@ TEST(BagPlayback, DoorsOfThePlayedBagMatchItsTruth) {
 }
 
 // A robot's drive (door_scene_sim --drive, its truth in `map`) played through
-// door_state.launch with use_sim_time (drive_playback.test): the last
-// tracked_doors holds every door the robot passed within 3 m in its true
-// state, the angle within 5 deg, and each door kept one id over the drive.
+// door_state.launch with use_sim_time (drive_playback.test, drive_toggle.test
+// where a door opens during the drive): the last tracked_doors holds every
+// door the robot passed within 3 m in its final true state, the angle within
+// 5 deg (or NOT_CLOSED, bounded below its angle, where the leaf was out of
+// sight), and each door kept one id over the drive.
 TEST(DrivePlayback, TrackedDoorsOfTheDriveMatchItsTruth) {
   if (g_mode != "drive") GTEST_SKIP();
   ros::NodeHandle nh, pnh("~");
@@ -922,8 +924,17 @@ TEST(DrivePlayback, TrackedDoorsOfTheDriveMatchItsTruth) {
     const door_state_recognition::DoorState* d = nearest(last, t);
     ASSERT_NE(d, nullptr) << "not in the last tracked_doors (" << last.doors.size() << " doors)";
     ASSERT_LT(d->state, 4);
-    EXPECT_EQ(std::string(kStates[d->state]), t["state"].get<std::string>());
-    EXPECT_NEAR(d->opening_angle * 180.0 / M_PI, t["opening_angle_deg"].get<double>(), 5.0);
+    const double angle = d->opening_angle * 180.0 / M_PI, true_angle = t["opening_angle_deg"].get<double>();
+    if (d->state == door_state_recognition::DoorState::NOT_CLOSED) {
+      // A leaf out of sight (issue 20's rule): right where the door is not
+      // closed and the bound lies below its angle.
+      EXPECT_NE(t["state"].get<std::string>(), "closed");
+      EXPECT_TRUE(d->angle_is_lower_bound);
+      EXPECT_LE(angle, true_angle + 5.0);
+    } else {
+      EXPECT_EQ(std::string(kStates[d->state]), t["state"].get<std::string>());
+      EXPECT_NEAR(angle, true_angle, 5.0);
+    }
     EXPECT_GE(d->observations, 2u);
     // One id per door over the whole drive.
     std::set<std::uint32_t> ids;
