@@ -30,7 +30,7 @@ struct DoorwayJob {
   double floor_z, top_z;
   Eigen::Vector3f viewpoint;
   const Parameters* p;
-  bool free_if_no_return;  // a doorway cell without a return is free space (a camera frame)
+  bool organized;
   const segmentation::ViewTop* view;  // a camera frame's, or null
   util::FirstError* error;
 };
@@ -38,7 +38,7 @@ void startDoorwayTask(const DoorwayJob& job_in) {
   const DoorwayJob job = job_in;
 #pragma omp task firstprivate(job)
   job.error->run([&] {
-    *job.out = recognition::findDoorways(*job.pts, *job.wall, job.floor_z, job.top_z, job.viewpoint, *job.p, job.free_if_no_return,
+    *job.out = recognition::findDoorways(*job.pts, *job.wall, job.floor_z, job.top_z, job.viewpoint, *job.p, job.organized,
                                          job.view);
   });
 }
@@ -91,7 +91,7 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   Stopwatch watch(&res.timing_ms);
   res.points_in = cloud.size();
   res.viewpoint = viewpoint_in;
-  const bool organized = cloud.height > 1;  // a camera frame, or a rotating LiDAR's rings
+  const bool organized = cloud.height > 1;  // a camera frame: no return means nothing in range
   if (const std::optional<std::string> why = implausibleInput(cloud, viewpoint_in)) {
     res.warnings.push_back(*why);
     watch.total();
@@ -142,14 +142,6 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   // rings included): its rays without a return and its image's up.
   const std::optional<preprocess::Pinhole> camera =
       organized ? preprocess::fitPinhole(cloud, viewpoint_in.cast<float>()) : std::nullopt;
-  // A doorway cell without any return is free space only in a camera frame,
-  // whose pixels sample every direction of its view densely: nothing came
-  // back from there in range. A rotating LiDAR's sweep is organized too, but
-  // its rings sample a wall along lines 4-20 cm apart 3-6 m off (0.7-2 deg
-  // between beams) against the evidence grid's 5 cm rows: a cell between two
-  // rings was not looked at, and read as seen through it made plain wall
-  // into a doorway (recognition.hpp, no_return_is_free).
-  const bool free_if_no_return = camera.has_value();
   {
     util::FirstError error;
 #pragma omp parallel
@@ -246,7 +238,7 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
     if (found.size() <= wi) found.resize(wi + 1);
     found[wi] = std::make_shared<std::vector<recognition::Doorway>>();
     startDoorwayTask({std::make_shared<const segmentation::WallPlane>(wall), found[wi], &pts, floor_z, top_z, viewpoint,
-                      &p, free_if_no_return, organized ? &view : nullptr, &doorway_error});
+                      &p, organized, organized ? &view : nullptr, &doorway_error});
   };
   const std::vector<segmentation::WallPlane> walls = segmentation::findWalls(
       pts, normals, floor_z, top_z, fc.ceiling.has_value(), viewpoint.head<2>().cast<double>(), p, &view, onWall);
@@ -255,7 +247,7 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   for (std::size_t wi = 0; wi < walls.size(); ++wi)
     doorways[wi] = wi < found.size() && found[wi]
                        ? std::move(*found[wi])
-                       : recognition::findDoorways(pts, walls[wi], floor_z, top_z, viewpoint, p, free_if_no_return,
+                       : recognition::findDoorways(pts, walls[wi], floor_z, top_z, viewpoint, p, organized,
                                                    organized ? &view : nullptr);
   watch.mark("walls");
   for (std::size_t wi = 0; wi < walls.size(); ++wi) {
