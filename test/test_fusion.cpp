@@ -321,6 +321,59 @@ TEST(DriveTracker, ASensorJumpBeyondMaxSpeedResetsTheTracksAndAnUnknownSensorIsN
   EXPECT_THROW(dsr::DriveTracker{o}, std::invalid_argument);
 }
 
+// Confirmation (DriveTrackerOptions::confirm_clouds, confirm_spread_m): a
+// door of one cloud is not published; one found again from another place is,
+// with the id it had, and stays published.
+TEST(DriveTracker, ATrackIsPublishedOnlyOnceAnotherCloudShowsIt) {
+  dsr::PipelineResult one, none;
+  one.doors = {door(kA, 0)};
+  const dsr::Parameters p;
+  // The defaults: 2 clouds, from anywhere.
+  dsr::DriveTracker d;
+  d.fuse(one, 1.0, p, Eigen::Vector3d(0, 0, 1));
+  EXPECT_TRUE(d.published().empty());  // one cloud: a false door of one sweep looks the same
+  d.fuse(one, 1.1, p, Eigen::Vector3d(0, 0, 1));
+  ASSERT_EQ(d.published().size(), 1u);
+  EXPECT_EQ(d.published()[0].id, d.tracks()[0].id);
+  // 2 clouds, 0.3 m apart.
+  dsr::DriveTrackerOptions far;
+  far.confirm_spread_m = 0.3;
+  dsr::DriveTracker t(far);
+  t.fuse(one, 1.0, p, Eigen::Vector3d(0, 0, 1));
+  ASSERT_EQ(t.tracks().size(), 1u);
+  EXPECT_TRUE(t.published().empty());
+  t.fuse(one, 1.1, p, Eigen::Vector3d(0.1, 0, 1));  // again, but from (almost) the same place
+  EXPECT_TRUE(t.published().empty());
+  EXPECT_NEAR(t.spread(t.tracks()[0].id), 0.1, 1e-12);
+  t.fuse(none, 1.2, p, Eigen::Vector3d(0.2, 0, 1));  // a cloud not showing it moves nothing
+  EXPECT_TRUE(t.published().empty());
+  t.fuse(one, 1.3, p, Eigen::Vector3d(0.1, 0.3, 1));  // 0.316 m from where it was first seen
+  ASSERT_EQ(t.published().size(), 1u);
+  const std::uint32_t id = t.published()[0].id;
+  EXPECT_EQ(id, t.tracks()[0].id);
+  EXPECT_TRUE(t.confirmed(id));
+  t.fuse(none, 1.4, p, Eigen::Vector3d(0.3, 0, 1));
+  EXPECT_EQ(t.published().size(), 1u);  // confirmed stays so
+  // A sensor never known: the clouds alone confirm.
+  dsr::DriveTracker unknown(far);
+  unknown.fuse(one, 1.0, p, std::nullopt);
+  EXPECT_TRUE(unknown.published().empty());
+  unknown.fuse(one, 2.0, p, std::nullopt);
+  EXPECT_EQ(unknown.published().size(), 1u);
+  // 1 and 0: every track at once (before confirmation).
+  dsr::DriveTrackerOptions o;
+  o.confirm_clouds = 1;
+  o.confirm_spread_m = 0;
+  dsr::DriveTracker all(o);
+  all.fuse(one, 1.0, p, Eigen::Vector3d::Zero());
+  EXPECT_EQ(all.published().size(), 1u);
+  o.confirm_clouds = 0;
+  EXPECT_THROW(dsr::DriveTracker{o}, std::invalid_argument);
+  o.confirm_clouds = 2;
+  o.confirm_spread_m = -1;
+  EXPECT_THROW(dsr::DriveTracker{o}, std::invalid_argument);
+}
+
 TEST(DriveTracker, ThePipelinesThresholdsDecideTheStatesOfBounds) {
   dsr::DriveTracker t;
   dsr::PipelineResult r;

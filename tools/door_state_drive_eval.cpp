@@ -18,7 +18,8 @@ namespace {
 const char* kUsage =
     "usage: door_state_drive_eval [--sensor S] [--seeds A-B] [--every K] [--toggle auto]\n"
     "                             [--toggle-door K:ANGLE@T ...] [--lidar-motion]\n"
-    "                             [--disprove] [--config YAML] [--verbose]\n"
+    "                             [--disprove] [--confirm-clouds N] [--confirm-spread M]\n"
+    "                             [--config YAML] [--verbose]\n"
     "\n"
     "For each seed, plans the drive of `door_scene_sim --drive --seed S --sensor X`,\n"
     "simulates every K-th cloud, runs it through the nodelet's core (DriveTracker:\n"
@@ -36,6 +37,9 @@ const char* kUsage =
     "                        middle of its time in view; the latency is scored\n"
     "  --toggle-door K:ANGLE@T  door K is at ANGLE deg from T s on (repeatable)\n"
     "  --lidar-motion        LiDAR sweeps not deskewed (the robot moves during one)\n"
+    "  --confirm-clouds N    publish a track once N processed clouds showed it (default 2;\n"
+    "                        1 with --confirm-spread 0: every track at once)\n"
+    "  --confirm-spread M    ... from sensor positions M metres apart (default 0)\n"
     "  --disprove            drop tracks whose doorway later sweeps measure as wall\n"
     "                        (DriveTracker's disproof, off in the nodelet)\n"
     "  --config YAML         pipeline parameters (as door_state_cli --config)\n"
@@ -44,6 +48,7 @@ const char* kUsage =
     "\n"
     "Exit status: 0 on success, 2 on bad arguments.\n";
 
+using dsr::tools::toDouble;
 using dsr::tools::toInt;
 using dsr::tools::UsageError;
 
@@ -88,6 +93,14 @@ int main(int argc, char** argv) {
         o.params = dsr::loadParameters(value());
       } else if (a == "--disprove") {
         o.tracker.disprove = true;
+      } else if (a == "--confirm-clouds") {
+        const long long k = toInt(a, value());
+        if (k < 1 || k > 1000) throw UsageError("--confirm-clouds must be an integer in [1, 1000]");
+        o.tracker.confirm_clouds = static_cast<int>(k);
+      } else if (a == "--confirm-spread") {
+        o.tracker.confirm_spread_m = toDouble(a, value());
+        if (!(o.tracker.confirm_spread_m >= 0) || o.tracker.confirm_spread_m > 100)
+          throw UsageError("--confirm-spread must be a number of metres in [0, 100]");
       } else if (a == "--verbose") {
         verbose = true;
       } else {

@@ -157,7 +157,7 @@ DriveEvalResult evaluateDrive(std::uint64_t seed, const DriveEvalOptions& o) {
     if (step.step.relocalised) ++r.relocalisations;
     r.disproved += static_cast<int>(step.step.disproved);
     ++r.processed;
-    const std::vector<TrackedDoor>& tracks = tracker.tracks();
+    const std::vector<TrackedDoor> tracks = tracker.published();
     for (const TrackedDoor& t : tracks) {  // every track near a door is one of its ids
       int nearest = -1;
       double best = o.match_distance_m;
@@ -183,8 +183,10 @@ DriveEvalResult evaluateDrive(std::uint64_t seed, const DriveEvalOptions& o) {
   }
   r.pipeline_ms_median = median(times);
 
-  // The last tracked_doors against the final truth.
-  const std::vector<TrackedDoor>& tracks = tracker.tracks();
+  // The last tracked_doors (the confirmed tracks) against the final truth.
+  const std::vector<TrackedDoor> tracks = tracker.published();
+  for (const TrackedDoor& t : tracks) r.spread_m[t.id] = tracker.spread(t.id);
+  r.unconfirmed = static_cast<int>(tracker.tracks().size() - tracks.size());
   const std::vector<int> match = matchTracks(tracks, final_scene, o.match_distance_m);
   std::vector<char> used(tracks.size(), 0);
   for (int k = 0; k < n; ++k) {
@@ -199,6 +201,7 @@ DriveEvalResult evaluateDrive(std::uint64_t seed, const DriveEvalOptions& o) {
     const TrackedDoor& t = tracks[match[k]];
     d.matched = true;
     d.track_id = t.id;
+    d.observations = t.observations;
     d.state = toString(t.door.state);
     d.angle_deg = t.door.opening_angle_deg;
     d.lower_bound = t.door.angle_is_lower_bound;
@@ -253,7 +256,8 @@ nlohmann::json toJson(const DriveEvalResult& r) {
     doors.push_back({{"door", d.door}, {"truth_state", d.truth_state}, {"truth_angle_deg", d.truth_angle_deg},
                      {"min_distance_m", d.min_distance_m}, {"passed", d.passed}, {"in_view", d.in_view},
                      {"leaf_seen", d.leaf_seen}, {"leaf_share_max", d.leaf_share_max}, {"matched", d.matched},
-                     {"track_id", d.track_id}, {"state", d.state}, {"angle_deg", d.angle_deg},
+                     {"track_id", d.track_id}, {"observations", d.observations},
+                     {"spread_m", r.spread_m.count(d.track_id) ? r.spread_m.at(d.track_id) : 0.0}, {"state", d.state}, {"angle_deg", d.angle_deg},
                      {"angle_is_lower_bound", d.lower_bound}, {"ids", d.ids}, {"right", d.right}, {"why", d.why}});
   for (const ChangeOutcome& c : r.changes)
     changes.push_back({{"door", c.change.door}, {"t", c.change.t}, {"to_deg", c.change.angle_deg},
@@ -267,10 +271,12 @@ nlohmann::json toJson(const DriveEvalResult& r) {
     const Eigen::Vector3d& c = t.door.opening_center;
     false_tracks.push_back({{"id", t.id}, {"opening_center", {c.x(), c.y(), c.z()}}, {"state", toString(t.door.state)},
                             {"angle_deg", t.door.opening_angle_deg}, {"width", t.door.width},
-                            {"observations", t.observations}, {"first_seen", t.first_seen}, {"last_seen", t.last_seen}});
+                            {"observations", t.observations},
+                            {"spread_m", r.spread_m.count(t.id) ? r.spread_m.at(t.id) : 0.0}, {"first_seen", t.first_seen}, {"last_seen", t.last_seen}});
   }
   return {{"seed", r.seed}, {"sensor", r.sensor}, {"seconds", r.seconds}, {"frames", r.frames},
           {"every", r.every}, {"processed", r.processed}, {"false_doors", r.false_doors},
+          {"unconfirmed_tracks", r.unconfirmed},
           {"relocalisations", r.relocalisations}, {"disproved", r.disproved}, {"process_ms_median", r.pipeline_ms_median},
           {"doors", doors}, {"changes", changes}, {"false_tracks", false_tracks}};
 }

@@ -22,7 +22,9 @@
 // within 1 s are not fused; the sensor moving in the fixed frame faster than
 // ~max_sensor_speed (m/s, default 3; 0: never) + 0.5 m between two
 // processed clouds (a relocalisation jump) resets the tracks: each with a
-// throttled warning. Bad input is logged (throttled) and
+// throttled warning. A track is published once ~confirm_clouds processed
+// clouds (default 2) showed it, from sensor positions ~confirm_spread_m
+// (default 0) apart (DriveTracker: a false door of one cloud is not). Bad input is logged (throttled) and
 // answered with an empty DoorStateArray carrying the input's header; nothing
 // here may throw into the nodelet manager. Bad ~ parameters at start (unknown
 // name, wrong type, out of range) are refused before dynamic_reconfigure can
@@ -199,6 +201,15 @@ std::vector<std::string> checkPrivateParameters(const ros::NodeHandle& pnh) {
         problems.push_back(pname + " is " + got + ": must be a number of m/s >= 0 (0: no relocalisation check)");
       continue;
     }
+    if (name == "confirm_clouds") {
+      if (v.getType() != XmlRpc::XmlRpcValue::TypeInt || static_cast<int>(v) < 1) problems.push_back(pname + " is " + got + ": must be an int >= 1");
+      continue;
+    }
+    if (name == "confirm_spread_m") {
+      if (!isNumber(v) || !(asDouble(v) >= 0) || !std::isfinite(asDouble(v)))
+        problems.push_back(pname + " is " + got + ": must be a number of metres >= 0");
+      continue;
+    }
     if (name == "state_change_deg") {
       if (!isNumber(v) || !(asDouble(v) > 0 && asDouble(v) <= 180))
         problems.push_back(pname + " is " + got + ": must be a number of degrees in (0, 180]");
@@ -210,7 +221,7 @@ std::vector<std::string> checkPrivateParameters(const ros::NodeHandle& pnh) {
     }
     const auto c = cfg.find(name);
     if (c == cfg.end()) {
-      problems.push_back(pname + ": unknown parameter (the pipeline's are those of config/default.yaml; the nodelet's own are fixed_frame, viewpoint, tf_queue_size, diagnostic_period, forget_after_s, state_change_deg, max_sensor_speed)");
+      problems.push_back(pname + ": unknown parameter (the pipeline's are those of config/default.yaml; the nodelet's own are fixed_frame, viewpoint, tf_queue_size, diagnostic_period, forget_after_s, state_change_deg, max_sensor_speed, confirm_clouds, confirm_spread_m)");
       continue;
     }
     const std::string& type = c->second->type;
@@ -390,6 +401,8 @@ class DoorStateNodelet : public nodelet::Nodelet {
       pnh_.param("forget_after_s", o.fusion.forget_after_s, o.fusion.forget_after_s);
       pnh_.param("state_change_deg", o.fusion.state_change_deg, o.fusion.state_change_deg);
       pnh_.param("max_sensor_speed", o.max_sensor_speed, o.max_sensor_speed);
+      pnh_.param("confirm_clouds", o.confirm_clouds, o.confirm_clouds);
+      pnh_.param("confirm_spread_m", o.confirm_spread_m, o.confirm_spread_m);
       drive_ = dsr::DriveTracker(o);  // checked above: cannot throw
     }
     pipeline_ = std::make_shared<const dsr::Pipeline>(params_);
@@ -726,7 +739,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
     }
     DoorStateArrayPtr tracked = boost::make_shared<DoorStateArray>();
     tracked->header = header;
-    for (const dsr::TrackedDoor& t : drive_.tracks()) {
+    for (const dsr::TrackedDoor& t : drive_.published()) {
       ros::Time seen = header.stamp;  // exactly the header's for a door this cloud shows
       if (!t.seen_now) seen.fromSec(std::max(0.0, t.last_seen));
       tracked->doors.push_back(toMsg(t.door, t.id, seen, t.observations));
@@ -750,7 +763,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
     if (step) publishTracked(*step, header);
     if (pub_markers_.getNumSubscribers() > 0) {
       auto markers = boost::make_shared<visualization_msgs::MarkerArray>(dsr::ros_io::makeMarkers(r, ids, header));
-      if (!fixed_frame_.empty()) dsr::ros_io::addTrackedMarkers(drive_.tracks(), header, *markers);
+      if (!fixed_frame_.empty()) dsr::ros_io::addTrackedMarkers(drive_.published(), header, *markers);
       pub_markers_.publish(markers);
     }
     if (pub_walls_.getNumSubscribers() > 0) {
@@ -849,7 +862,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
   std::string last_refusal_;
   ros::WallTime last_refusal_time_;
   dsr::DoorTracker tracker_;                        // worker only
-  dsr::DriveTracker drive_;                         // worker only (fixed frame): ~forget_after_s, ~state_change_deg, ~max_sensor_speed
+  dsr::DriveTracker drive_;                         // worker only (fixed frame): ~forget_after_s, ~state_change_deg, ~max_sensor_speed, ~confirm_*
   std::atomic<unsigned long> fusion_resets_{0}, fusion_ignored_{0}, relocalisations_{0}, disproved_{0};
   std::atomic<std::size_t> tracked_count_{0};
   pcl::PointCloud<pcl::PointXYZ> cloud_;            // worker only, reused between clouds

@@ -12,6 +12,9 @@ void DriveTrackerOptions::validate() const {
     throw std::invalid_argument("max_sensor_speed must be a finite number of m/s >= 0 (0: no relocalisation check)");
   if (!(jump_slack_m >= 0) || !std::isfinite(jump_slack_m))
     throw std::invalid_argument("jump_slack_m must be a finite number of metres >= 0");
+  if (confirm_clouds < 1) throw std::invalid_argument("confirm_clouds must be >= 1");
+  if (!(confirm_spread_m >= 0) || !std::isfinite(confirm_spread_m))
+    throw std::invalid_argument("confirm_spread_m must be a finite number of metres >= 0");
 }
 
 DriveTracker::DriveTracker(const DriveTrackerOptions& options) : options_(options), fusion_(options.fusion) {
@@ -54,7 +57,44 @@ DriveTracker::Step DriveTracker::fuse(const PipelineResult& result, double stamp
   fusion_.setOptions(fo);  // the pipeline's thresholds, validated with it
   s.newest_before = fusion_.newestStamp();
   s.fusion = fusion_.update(result.doors, stamp, result.up);
+  confirm(s, sensor);
   return s;
+}
+
+void DriveTracker::confirm(const Step& s, const std::optional<Eigen::Vector3d>& sensor) {
+  if (s.fusion.outcome == DoorFusion::Outcome::Reset) sights_.clear();
+  for (auto it = sights_.begin(); it != sights_.end();) {  // forget the tracks gone (forgotten, joined, reset)
+    bool alive = false;
+    for (const TrackedDoor& t : fusion_.tracks()) alive = alive || t.id == it->first;
+    it = alive ? std::next(it) : sights_.erase(it);
+  }
+  for (const TrackedDoor& t : fusion_.tracks()) {
+    Sight& g = sights_[t.id];
+    if (t.seen_now && sensor) {
+      const Eigen::Vector2d p = sensor->head<2>();
+      if (!g.known) g.first = p, g.known = true;
+      g.spread = std::max(g.spread, (p - g.first).norm());
+    }
+    const bool far = !g.known || g.spread >= options_.confirm_spread_m;
+    if (t.observations >= static_cast<std::uint32_t>(options_.confirm_clouds) && far) g.confirmed = true;
+  }
+}
+
+bool DriveTracker::confirmed(std::uint32_t id) const {
+  const auto it = sights_.find(id);
+  return it != sights_.end() && it->second.confirmed;
+}
+
+double DriveTracker::spread(std::uint32_t id) const {
+  const auto it = sights_.find(id);
+  return it == sights_.end() ? 0.0 : it->second.spread;
+}
+
+std::vector<TrackedDoor> DriveTracker::published() const {
+  std::vector<TrackedDoor> out;
+  for (const TrackedDoor& t : fusion_.tracks())
+    if (confirmed(t.id)) out.push_back(t);
+  return out;
 }
 
 DriveTracker::Processed DriveTracker::process(const Pipeline& pipeline, pcl::PointCloud<pcl::PointXYZ>& cloud,
@@ -140,6 +180,7 @@ std::size_t DriveTracker::disprove(const pcl::PointCloud<pcl::PointXYZ>& cloud, 
 
 void DriveTracker::reset() {
   misses_.clear();
+  sights_.clear();
   fusion_.reset();
   last_sensor_.reset();
 }

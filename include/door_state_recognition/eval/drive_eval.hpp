@@ -34,6 +34,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -73,6 +74,7 @@ struct DoorOutcome {
   double leaf_share_max = 0;               // best leaf cell share of a processed cloud (after the last change)
   bool matched = false, right = false;
   std::uint32_t track_id = 0;
+  std::uint32_t observations = 0;          // the matched track's
   std::string state;                       // the matched track's
   double angle_deg = 0;
   bool lower_bound = false;
@@ -104,6 +106,8 @@ struct DriveEvalResult {
   double pipeline_ms_median = 0, fusion_ms_max = 0;
   int relocalisations = 0;                 // resets for a sensor jump (none expected in a simulated drive)
   int disproved = 0;                       // tracks dropped, their doorway measured as wall (DriveTracker)
+  int unconfirmed = 0;                     // the last tracks not published (DriveTracker's confirmation)
+  std::map<std::uint32_t, double> spread_m;  // by published track id: DriveTracker::spread
 };
 
 // Throws std::invalid_argument for absurd options (as sim::planDrive).
