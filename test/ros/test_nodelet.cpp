@@ -838,14 +838,20 @@ TEST(DoorTracker, MatchesAcrossTheUpVectorOfTheCloudsFrame) {
   }
 }
 
+// The simulator's truth of the played bag: the file named by ~truth.
+void readTruth(nlohmann::json& truth) {
+  std::string path;
+  ASSERT_TRUE(ros::NodeHandle("~").getParam("truth", path));
+  std::ifstream in(path);
+  ASSERT_TRUE(in.good()) << path;
+  truth = nlohmann::json::parse(in);
+}
+
 TEST(BagPlayback, DoorsOfThePlayedBagMatchItsTruth) {
   if (g_mode != "bag") GTEST_SKIP();
-  ros::NodeHandle nh, pnh("~");
-  std::string truth_path;
-  ASSERT_TRUE(pnh.getParam("truth", truth_path));
-  std::ifstream in(truth_path);
-  ASSERT_TRUE(in.good()) << truth_path;
-  nlohmann::json truth = nlohmann::json::parse(in);
+  ros::NodeHandle nh;
+  nlohmann::json truth;
+  ASSERT_NO_FATAL_FAILURE(readTruth(truth));
   Received rx;
   ros::Subscriber sub = nh.subscribe<DoorStateArray>("doors", 10, [&](const door_state_recognition::DoorStateArrayConstPtr& m) {
     std::lock_guard<std::mutex> l(rx.m);
@@ -878,12 +884,9 @@ TEST(BagPlayback, DoorsOfThePlayedBagMatchItsTruth) {
 // sight), and each door kept one id over the drive.
 TEST(DrivePlayback, TrackedDoorsOfTheDriveMatchItsTruth) {
   if (g_mode != "drive") GTEST_SKIP();
-  ros::NodeHandle nh, pnh("~");
-  std::string truth_path;
-  ASSERT_TRUE(pnh.getParam("truth", truth_path));
-  std::ifstream in(truth_path);
-  ASSERT_TRUE(in.good()) << truth_path;
-  const nlohmann::json truth = nlohmann::json::parse(in);
+  ros::NodeHandle nh;
+  nlohmann::json truth;
+  ASSERT_NO_FATAL_FAILURE(readTruth(truth));
   Received rx;
   ros::WallTime last_at;
   ros::Subscriber sub =
