@@ -87,7 +87,7 @@ if [ "${DEMO_DRIVE:-1}" != 0 ]; then
   LISTENER_PID=$!
   rosbag play -q "$OUT/drive.bag" > "$OUT/drive_play.log" 2>&1
   wait $LISTENER_PID || true
-  echo "   (doors seen in a cloud or two that are not there are the drive's known failure: doc/results.md, Drives)"
+  echo "   (doors seen in a few clouds that are not there are the drive's known failure: doc/results.md, Drives)"
   echo "   (nodelet log: $OUT/drive_roslaunch.log; the bag, $(du -h "$OUT/drive.bag" | cut -f1), is deleted: DEMO_DRIVE=0 skips this part)"
   rm -f "$OUT/drive.bag"
 fi
