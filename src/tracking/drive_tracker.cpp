@@ -3,6 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <unordered_set>
 
 namespace dsr {
 
@@ -63,11 +64,9 @@ DriveTracker::Step DriveTracker::fuse(const PipelineResult& result, double stamp
 
 void DriveTracker::confirm(const Step& s, const std::optional<Eigen::Vector3d>& sensor) {
   if (s.fusion.outcome == DoorFusion::Outcome::Reset) sights_.clear();
-  for (auto it = sights_.begin(); it != sights_.end();) {  // forget the tracks gone (forgotten, joined, reset)
-    bool alive = false;
-    for (const TrackedDoor& t : fusion_.tracks()) alive = alive || t.id == it->first;
-    it = alive ? std::next(it) : sights_.erase(it);
-  }
+  std::unordered_set<std::uint32_t> alive;  // forget the tracks gone (forgotten, joined, reset)
+  for (const TrackedDoor& t : fusion_.tracks()) alive.insert(t.id);
+  for (auto it = sights_.begin(); it != sights_.end();) it = alive.count(it->first) ? std::next(it) : sights_.erase(it);
   for (const TrackedDoor& t : fusion_.tracks()) {
     Sight& g = sights_[t.id];
     if (t.seen_now && sensor) {
