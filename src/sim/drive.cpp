@@ -467,6 +467,33 @@ bool sensorSeesDoor(const Scene& scene, const SimulatedCloud& cloud, int door) {
   return false;
 }
 
+double leafInViewShare(const Scene& scene, const SimulatedCloud& cloud, int door) {
+  if (cloud.lidar_beams > 0 || cloud.sensor != "rgbd") return 0.0;
+  if (door < 0 || door >= static_cast<int>(scene.doors.size())) return 0.0;
+  const DoorTruth& d = scene.doors[door];
+  const Eigen::Isometry3d W2S = cloud.sensor_to_world.inverse();
+  const Eigen::Vector3d origin = cloud.sensor_to_world.translation();
+  const auto& c = d.leaf_corners;  // mid-thickness: hinge-bottom, latch-bottom, latch-top, hinge-top
+  const Eigen::Vector3d across = c[1] - c[0], up = c[3] - c[0];
+  const Eigen::Vector3d n = across.cross(up).normalized();
+  const double cos_max = std::cos(cloud.rgbd.max_incidence_deg * kDeg);
+  constexpr int kAcross = 8, kUp = 16;  // cells of about 11 x 13 cm on a 0.9 x 2 m leaf
+  int seen = 0;
+  for (int i = 0; i < kAcross; ++i)
+    for (int j = 0; j < kUp; ++j) {
+      const Eigen::Vector3d mid = c[0] + across * ((i + 0.5) / kAcross) + up * ((j + 0.5) / kUp);
+      // The point on the face turned to the camera.
+      const Eigen::Vector3d p = mid + n * (n.dot(origin - mid) >= 0 ? 0.5 : -0.5) * scene.spec.leaf_thickness;
+      if (!inImage(cloud.rgbd, W2S * p)) continue;
+      const double dist = (p - origin).norm();
+      const Eigen::Vector3d dir = (p - origin) / dist;
+      if (std::abs(n.dot(dir)) < cos_max) continue;  // too grazing: the camera returns nothing there
+      const RayHit hit = castRay(scene, origin, dir, dist + 0.01);
+      seen += hit.hit && (hit.surface == Surface::Leaf || hit.surface == Surface::Handle) && hit.owner == door;
+    }
+  return static_cast<double>(seen) / (kAcross * kUp);
+}
+
 nlohmann::json driveTruthJson(const DrivePlan& plan, double start_stamp) {
   const DriveOptions& o = plan.options;
   auto vec = [](const Eigen::Vector3d& v) { return nlohmann::json{v.x(), v.y(), v.z()}; };
@@ -477,6 +504,7 @@ nlohmann::json driveTruthJson(const DrivePlan& plan, double start_stamp) {
   nlohmann::json j = groundTruthJson(plan.scenes.back(), in_map);
   j.erase("ceiling_in_view");
   j.erase("sensor_origins");
+  for (auto& d : j["doors"]) d.erase("leaf_in_view");  // a camera's, per frame
   const int n = static_cast<int>(plan.scenes.front().doors.size());
   std::vector<int> seen(n, 0);
   std::vector<double> first(n, -1), last(n, -1), min_dist(n, std::numeric_limits<double>::infinity());

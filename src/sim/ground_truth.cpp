@@ -1,5 +1,6 @@
 #include "door_state_recognition/sim/ground_truth.hpp"
 
+#include "door_state_recognition/sim/drive.hpp"
 #include "door_state_recognition/sim/lidar.hpp"
 
 namespace dsr {
@@ -7,17 +8,6 @@ namespace sim {
 namespace {
 
 nlohmann::json vec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
-
-// A camera sees a door when the middle of its doorway, 1 m above the floor,
-// projects into the image within range; a laser scanner sees every door (a
-// rotating LiDAR: see lidarSeesDoor).
-bool inView(const SimulatedCloud& c, const Eigen::Vector3d& p_sensor) {
-  if (c.sensor != "rgbd") return true;
-  const RgbdOptions& o = c.rgbd;
-  if (p_sensor.z() < o.min_range || p_sensor.z() > o.max_range) return false;
-  const double u = o.fx * p_sensor.x() / p_sensor.z() + o.cx, v = o.fy * p_sensor.y() / p_sensor.z() + o.cy;
-  return u >= 0 && u < o.width && v >= 0 && v < o.height;
-}
 
 }  // namespace
 
@@ -52,8 +42,13 @@ nlohmann::json groundTruthJson(const Scene& scene, const SimulatedCloud& cloud) 
     door["recess"] = d.recess;
     door["wall"] = d.wall;
     door["wall_normal"] = vec(R * d.wall_normal);
-    door["in_view"] = cloud.lidar_beams > 0 ? lidarSeesDoor(scene, cloud, static_cast<int>(&d - scene.doors.data()))
-                                            : inView(cloud, W2S * (d.opening_center + Eigen::Vector3d(0, 0, 1.0)));
+    // A camera sees a door when part of its doorway is in the image with a
+    // clear sight line, a rotating LiDAR as lidarSeesDoor (both
+    // sensorSeesDoor); a terrestrial scanner sees every door.
+    const int k = static_cast<int>(&d - scene.doors.data());
+    const bool camera = cloud.sensor == "rgbd" && cloud.lidar_beams == 0;
+    door["in_view"] = camera || cloud.lidar_beams > 0 ? sensorSeesDoor(scene, cloud, k) : true;
+    if (camera) door["leaf_in_view"] = leafInViewShare(scene, cloud, k);
     nlohmann::json corners = nlohmann::json::array();
     for (const auto& c : d.leaf_corners) corners.push_back(vec(W2S * c));
     door["leaf_corners"] = corners;

@@ -103,6 +103,12 @@ std::vector<DriveFrame> simulateDrive(const RoomSpec& spec, const DriveOptions& 
 // sees door `door` of `scene`: LiDAR as lidarSeesDoor; RGB-D when a point of
 // the doorway projects into the image within range with a clear sight line.
 bool sensorSeesDoor(const Scene& scene, const SimulatedCloud& cloud, int door);
+// RGB-D only (else 0): the share, 0..1, of door `door`'s leaf the camera of
+// `cloud` sees: 8 x 16 points on the leaf's face turned to the camera (cell
+// centres of the rectangle leaf_corners span), each counted when it projects
+// into the image within range, at an incidence the camera returns
+// (max_incidence_deg) and the ray to it first hits that door's leaf or handle.
+double leafInViewShare(const Scene& scene, const SimulatedCloud& cloud, int door);
 
 // Ground truth of the drive, every coordinate in map: groundTruthJson of the
 // final scene in map ("doors" hold the states at the end of the drive, each

@@ -14,6 +14,8 @@ namespace sim {
 //  "decoys": [...], "walls": [...], "sensor_origins": [...], "sensor_to_world": {...}}
 // "floor"/"ceiling" are heights along "up" in the cloud frame (p . up).
 // Door states use closed < 5 deg <= semi_open < 90 deg <= open.
+// Each door's "in_view": sensorSeesDoor (sim/drive.hpp; true for a TLS);
+// RGB-D only, "leaf_in_view": leafInViewShare, the share of the leaf seen.
 nlohmann::json groundTruthJson(const Scene& scene, const SimulatedCloud& cloud);
 
 }  // namespace sim
