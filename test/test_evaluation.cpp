@@ -449,3 +449,44 @@ TEST(Evaluation, ANotClosedReportOfADoorOutOfViewCountsNeitherWay) {
   EXPECT_EQ(res.not_closed, 0);
   EXPECT_TRUE(std::isnan(res.stateAccuracyMeasured()));
 }
+
+// Issue 21: with min_leaf_in_view, only truth doors whose leaf a camera sees
+// (leaf_in_view >= the share) are scored; a door whose leaf is hidden is
+// neither missed nor, when reported, a false positive.
+TEST(Evaluation, LeafInViewOnlyScoresTheDoorsWhoseLeafIsSeen) {
+  json seen = truthDoor(vec(0, 0, 0), vec(-0.45, 0, 0), 30, "semi_open");
+  json hidden = truthDoor(vec(3, 0, 0), vec(2.55, 0, 0), 60, "semi_open");
+  json missed_hidden = truthDoor(vec(6, 0, 0), vec(5.55, 0, 0), 0, "closed");
+  seen["leaf_in_view"] = 0.8;
+  hidden["leaf_in_view"] = 0.1;
+  missed_hidden["leaf_in_view"] = 0.0;
+  const json t = truthDoc({seen, hidden, missed_hidden});
+  const json r = reportDoc({reportDoor(0, vec(0, 0, 0), vec(-0.45, 0, 0), 32, "semi_open"),
+                            reportDoor(1, vec(3, 0, 0), vec(2.55, 0, 0), 20, "semi_open")});
+  const EvalResult all = evaluate(t, r);
+  EXPECT_EQ(all.true_doors, 3);
+  EXPECT_EQ(all.matched, 2);
+  const EvalResult leaf = evaluate(t, r, 0.5, false, 0.5);
+  EXPECT_EQ(leaf.true_doors, 1);
+  EXPECT_EQ(leaf.reported_doors, 1);
+  EXPECT_EQ(leaf.matched, 1);
+  EXPECT_DOUBLE_EQ(leaf.precision(), 1.0);
+  EXPECT_DOUBLE_EQ(leaf.recall(), 1.0);
+  EXPECT_DOUBLE_EQ(leaf.angleMaeDeg(), 2.0);
+  EXPECT_TRUE(leaf.missed_truth.empty());
+  EXPECT_TRUE(leaf.unmatched_report.empty());
+  // A share of 0.05 keeps the door seen a little; 0 keeps every door.
+  EXPECT_EQ(evaluate(t, r, 0.5, false, 0.05).true_doors, 2);
+  EXPECT_EQ(evaluate(t, r, 0.5, false, 0.0).true_doors, 3);
+  // Both filters: a door out of view is left out whatever its leaf.
+  json t2 = t;
+  t2["doors"][0]["in_view"] = false;
+  EXPECT_EQ(evaluate(t2, r, 0.5, true, 0.5).true_doors, 0);
+  EXPECT_EQ(evaluate(t2, r, 0.5, true, 0.5).reported_doors, 0);
+  // Truth without the field (a laser scan's) or an absurd share is refused.
+  json t3 = t;
+  t3["doors"][1].erase("leaf_in_view");
+  EXPECT_THROW(evaluate(t3, r, 0.5, false, 0.5), std::invalid_argument);
+  EXPECT_NO_THROW(evaluate(t3, r, 0.5, false, -1.0));
+  EXPECT_THROW(evaluate(t, r, 0.5, false, 1.5), std::invalid_argument);
+}

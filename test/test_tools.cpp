@@ -68,6 +68,7 @@ TEST(Tools, HelpExitsZeroAndWrongArgumentsExitTwo) {
   EXPECT_EQ(run("door_scene_sim --out /tmp/x --sensor rgbd --pitch 90").code, 2);  // out of range
   EXPECT_EQ(run("door_scene_sim --out /tmp/x --sensor rgbd --resolution 1x1").code, 2);
   EXPECT_EQ(run("door_state_eval only_one.json").code, 2);
+  EXPECT_EQ(run("door_state_eval --leaf-in-view-only 1.5 a.json b.json").code, 2);  // a share above 1
   EXPECT_EQ(run("door_state_cli").code, 2);                                   // no INPUT
   EXPECT_EQ(run("door_state_cli a.pcd b.pcd").code, 2);                       // two stations, neither there
   EXPECT_EQ(run("door_state_cli --up sideways x.pcd").code, 2);               // bad axis

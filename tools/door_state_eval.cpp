@@ -22,8 +22,10 @@ using nlohmann::json;
 namespace {
 
 const char* kUsage =
-    "usage: door_state_eval [--max-distance M] [--in-view-only] GROUND_TRUTH.json REPORT.json\n"
-    "       door_state_eval [--max-distance M] [--in-view-only] --pairs LIST.txt\n"
+    "usage: door_state_eval [--max-distance M] [--in-view-only] [--leaf-in-view-only [SHARE]]\n"
+    "                       GROUND_TRUTH.json REPORT.json\n"
+    "       door_state_eval [--max-distance M] [--in-view-only] [--leaf-in-view-only [SHARE]]\n"
+    "                       --pairs LIST.txt\n"
     "\n"
     "Scores a door-state report against simulator ground truth and prints the\n"
     "result as JSON on stdout. A report in state \"not_closed\" (leaf unseen)\n"
@@ -35,6 +37,11 @@ const char* kUsage =
     "                    match, metres (default 0.5, must be >= 0)\n"
     "  --in-view-only    leave out true doors marked \"in_view\": false (outside a\n"
     "                    camera's view): neither missed nor false positives\n"
+    "  --leaf-in-view-only [SHARE]\n"
+    "                    score only true doors whose \"leaf_in_view\" (the share of\n"
+    "                    the leaf an RGB-D camera sees unoccluded, 0..1) is >= SHARE\n"
+    "                    (a number in [0, 1] right after the option; default 0.5):\n"
+    "                    the others are neither missed nor false positives\n"
     "  --pairs LIST.txt  evaluate many scenes: each line holds \"GT.json REPORT.json\"\n"
     "                    (relative paths are taken relative to LIST.txt's folder;\n"
     "                    blank lines and lines starting with '#' are skipped);\n"
@@ -73,10 +80,11 @@ json readJson(const std::string& path) {
   }
 }
 
-dsr::eval::EvalResult evalPair(const std::string& gt, const std::string& rep, double max_dist, bool in_view_only) {
+dsr::eval::EvalResult evalPair(const std::string& gt, const std::string& rep, double max_dist, bool in_view_only,
+                               double min_leaf) {
   const json truth = readJson(gt), report = readJson(rep);
   try {
-    return dsr::eval::evaluate(truth, report, max_dist, in_view_only);
+    return dsr::eval::evaluate(truth, report, max_dist, in_view_only, min_leaf);
   } catch (const std::invalid_argument& e) {
     // Messages start with "truth" or "report": name the matching file.
     const std::string msg = e.what();
@@ -113,6 +121,7 @@ int main(int argc, char** argv) {
   dsr::util::shortOmpSpin(argv);  // before anything else: the program may be run again
   double max_dist = 0.5;
   bool in_view_only = false;
+  double min_leaf = -1.0;  // --leaf-in-view-only: unused when negative
   std::string pairs_file;
   std::vector<std::string> files;
   bool options_done = false;
@@ -135,6 +144,18 @@ int main(int argc, char** argv) {
       if (max_dist < 0) return usageError("--max-distance must be >= 0, got " + v);
     } else if (a == "--in-view-only") {
       in_view_only = true;
+    } else if (a == "--leaf-in-view-only") {
+      min_leaf = 0.5;
+      if (i + 1 < argc) {  // an optional SHARE: the next argument when it is a number
+        const std::string v = argv[i + 1];
+        char* end = nullptr;
+        const double share = std::strtod(v.c_str(), &end);
+        if (!v.empty() && *end == '\0') {
+          if (!(share >= 0 && share <= 1)) return usageError("--leaf-in-view-only: SHARE must lie in [0, 1], got " + v);
+          min_leaf = share;
+          ++i;
+        }
+      }
     } else if (a == "--pairs") {
       if (++i >= argc) return usageError("--pairs needs a file");
       if (!pairs_file.empty()) return usageError("--pairs given twice");
@@ -149,10 +170,10 @@ int main(int argc, char** argv) {
   try {
     json out;
     if (pairs_file.empty()) {
-      out = dsr::eval::toJson(evalPair(files[0], files[1], max_dist, in_view_only));
+      out = dsr::eval::toJson(evalPair(files[0], files[1], max_dist, in_view_only, min_leaf));
     } else {
       std::vector<dsr::eval::EvalResult> results;
-      for (const auto& [gt, rep] : readPairs(pairs_file)) results.push_back(evalPair(gt, rep, max_dist, in_view_only));
+      for (const auto& [gt, rep] : readPairs(pairs_file)) results.push_back(evalPair(gt, rep, max_dist, in_view_only, min_leaf));
       out = dsr::eval::toJson(dsr::eval::merge(results));
       out["scenes"] = results.size();
     }

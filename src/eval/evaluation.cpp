@@ -20,7 +20,7 @@ struct Door {
   Eigen::Vector3d center, hinge;
   double angle;
   std::string state;
-  bool out_of_view = false;  // truth only: "in_view": false
+  bool out_of_view = false;  // truth only: left out ("in_view": false, or too little "leaf_in_view")
   bool lower_bound = false;  // report only: "angle_is_lower_bound": true
 };
 
@@ -126,9 +126,12 @@ double EvalResult::hingeErrorMedianM() const {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-EvalResult evaluate(const json& truth, const json& report, double max_center_distance_m, bool in_view_only) {
+EvalResult evaluate(const json& truth, const json& report, double max_center_distance_m, bool in_view_only,
+                    double min_leaf_in_view) {
   if (!std::isfinite(max_center_distance_m) || max_center_distance_m < 0)
     throw std::invalid_argument("max_center_distance_m must be a finite number >= 0");
+  if (std::isnan(min_leaf_in_view) || min_leaf_in_view > 1)
+    throw std::invalid_argument("min_leaf_in_view must lie in [0, 1] (negative: every door)");
   if (!truth.is_object()) fail("truth", "expected a JSON object");
   if (!report.is_object()) fail("report", "expected a JSON object");
   // Each document must be what it claims: simulator truth has "scene" (a
@@ -150,6 +153,15 @@ EvalResult evaluate(const json& truth, const json& report, double max_center_dis
     for (std::size_t i = 0; i < t.size(); ++i) {
       const auto it = arr[i].find("in_view");
       t[i].out_of_view = it != arr[i].end() && it->is_boolean() && !it->get<bool>();
+    }
+  }
+  if (min_leaf_in_view >= 0) {
+    const json& arr = truth.at("doors");
+    for (std::size_t i = 0; i < t.size(); ++i) {
+      const std::string w = "truth.doors[" + std::to_string(i) + "]";
+      const auto it = arr[i].find("leaf_in_view");
+      if (it == arr[i].end()) fail(w + ".leaf_in_view", "missing field (RGB-D frame truth only)");
+      if (number(*it, w + ".leaf_in_view") < min_leaf_in_view) t[i].out_of_view = true;
     }
   }
 
