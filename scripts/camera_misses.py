@@ -11,7 +11,9 @@ a side, the foot below the bottom), and the pipeline's stage it failed at:
 the door's wall not found (no reported wall within 0.3 m of the doorway), no
 doorway candidate on it, or the candidate's decision (door_state_cli
 --verbose: "no leaf (...)", "rejected: ..."), or for a wrong state what was
-reported. Ends with the counts of each cause.
+reported. Ends with the counts of each cause, and the false positives
+(reports matching no truth door) with where they stand: within 1 m of a
+true door, of furniture or a window, or elsewhere.
 
   scripts/camera_misses.py DIR [DIR ...] [--share S] [--bin BUILD_BIN]
 """
@@ -74,6 +76,10 @@ def trace(bin_dir, pcd):
     return walls, doorways, out
 
 
+def horizontal(v, up):
+    return float(np.linalg.norm(v - v.dot(up) * up))
+
+
 def wall_near(report, oc, up):
     """Distance from the doorway's middle to the nearest reported wall (horizontal, within its length)."""
     up = np.asarray(up, float)
@@ -97,7 +103,7 @@ def main():
     ap.add_argument("--bin", default=os.environ.get("DSR_BIN", str(Path(os.environ.get("DSR_BUILD", REPO / "build")) / "bin")))
     args = ap.parse_args()
     causes, geometry, right_geometry, scored = collections.Counter(), collections.Counter(), collections.Counter(), 0
-    false_positives = []
+    false_positives, fp_where = [], collections.Counter()
     examples = collections.defaultdict(list)
     for d in args.dirs:
         for line in (Path(d) / "pairs.txt").read_text().splitlines():
@@ -111,8 +117,14 @@ def main():
             up = np.asarray(truth["up"], float)
             seed = re.search(r"_(\d+)\.json$", gt).group(1)
             for j in res["unmatched_report"]:
+                rc = np.asarray(report["doors"][j]["opening_center"], float)
+                near_door = min([horizontal(np.asarray(t["opening_center"], float) - rc, up) for t in truth["doors"]] or [math.inf])
+                near_decoy = min([horizontal(np.asarray(t["center"], float) - rc, up) for t in truth["decoys"]] or [math.inf])
+                where = ("within 1 m of a true door" if near_door <= 1.0 else
+                         "within 1 m of furniture or a window" if near_decoy <= 1.0 else "elsewhere")
+                fp_where[where] += 1
                 false_positives.append(f"{Path(d).name} {seed} report door {j} "
-                                       f"({report['doors'][j]['state']} {report['doors'][j]['opening_angle_deg']:.0f} deg)")
+                                       f"({report['doors'][j]['state']} {report['doors'][j]['opening_angle_deg']:.0f} deg): {where}")
             for m in res["matches"]:  # where the doorways of the doors right lie
                 if m["state_correct"]:
                     head, side, foot = doorway_in_image(truth["doors"][m["truth_index"]], up)
@@ -167,7 +179,8 @@ def main():
     print("where the doorway lies (missed or wrong; found in the right state):")
     for c in ("head above the image", "jamb beyond a side", "foot below the image", "doorway in the image"):
         print(f"{geometry[c]:4d} {right_geometry[c]:4d}  {c}")
-    print(f"false positives (reports matching no scored door and no door left out): {len(false_positives)}")
+    print(f"false positives (reports matching no scored door and no door left out): {len(false_positives)}; "
+          + ", ".join(f"{n} {w}" for w, n in fp_where.most_common()))
     for f in false_positives:
         print("  " + f)
 
