@@ -895,7 +895,7 @@ TEST(DoorState, CameraFramesFindTheDoorInView) {
   // 12 simulated 640x480 RGB-D frames (camera optical frame, up -y, no
   // ceiling in view), the camera looking at one door of a random room. Held at
   // what the pipeline reaches today on these seeds (precision 0.92, recall
-  // 0.92, the state right in 9 of the 11 found: 3010, open 92 deg, is
+  // 0.92 before in_view's sight line, see below, the state right in 9 of the 11 found: 3010, open 92 deg, is
   // taken at 88); the issue asks for the state right in >= 90 % of frames:
   // reached on the 30 sweep frames 1000-1029, not on 2000-2029 nor on
   // these 12 (README). Since issue 20, 3011's leaf, swung away out of
@@ -911,7 +911,10 @@ TEST(DoorState, CameraFramesFindTheDoorInView) {
   const eval::EvalResult m = eval::merge(all);
   SCOPED_TRACE(log.str());
   EXPECT_GE(m.precision(), 0.9);
-  EXPECT_GE(m.recall(), 0.9);
+  // Since "in_view" needs a clear sight line to any of 9 points of the
+  // doorway (not its middle 1 m up): 3004's second closed door, its doorway
+  // partly in the image (leaf_in_view 0.25), is in view and missed: 11 of 13.
+  EXPECT_GE(m.recall(), 0.84);
   // Since the levelling of issue 21 (a given axis refined within 25 deg):
   // 3000's leaf, open 92 deg and seen edge-on, is measured about 10 deg off
   // its wall's plane (open at 169 deg before, semi-open at 10 since: wrong
