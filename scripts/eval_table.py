@@ -86,6 +86,9 @@ def sweep_args(name, config_dir):
 
 
 def main():
+    if any(a in ("-h", "--help") for a in sys.argv[1:]):
+        print(__doc__.strip())
+        return
     names = sys.argv[1:] or os.environ.get("EVAL_SWEEPS", "").split() or DEFAULT
     out = BUILD / "eval"
     out.mkdir(parents=True, exist_ok=True)
