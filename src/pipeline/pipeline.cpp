@@ -227,6 +227,7 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   segmentation::ViewTop view = organized ? segmentation::viewTop(pts, viewpoint) : segmentation::ViewTop{};
   // Its pixels without a return: rays along which nothing was in range.
   if (organized) {
+    view.ray_spacing = static_cast<float>(preprocess::raySpacing(cloud, viewpoint_in.cast<float>()));
     view.no_return = std::move(no_return);
     for (auto& d : view.no_return) d = R * d;
   }

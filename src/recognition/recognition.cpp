@@ -207,6 +207,10 @@ constexpr std::size_t kSplitPoints = 20000;
 
 }  // namespace
 
+// Standard errors of the wall's noise by which the mean offset of a trim
+// leg or head stands out (by chance in one sub-column of about 30000; a
+// cloud's walls hold about a thousand, a drive a hundred clouds).
+constexpr double kLegZ = 4.0;
 // Points a trim leg out of the plane needs where its neighbours are seen.
 constexpr int kLegMinPoints = 10;
 // Face points a head of trim needs across its doorway to be told by their
@@ -259,6 +263,9 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   // millimetre-sharp, depth-camera returns spread with range. The tolerance
   // is local: 2.5 sigma of the wall's inliers within half a metre along it.
   std::vector<double> col_tol(cols, p.face_tolerance);
+  // The noise itself (sigma, from the same median deviation): what a mean
+  // offset of n face points must exceed to stand out of the wall (trim legs).
+  std::vector<double> col_sigma(cols, p.face_tolerance / 2.5);
   {
     // The median deviation of the inliers within `win` columns: the deviations
     // ranked once, the window slid over the columns with its ranks counted
@@ -299,7 +306,8 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       if (c > 0 && c + win <= cols - 1) addColumn(c + win, 1);
       if (c - win - 1 >= 0) addColumn(c - win - 1, -1);
       if (size < 20) continue;
-      col_tol[c] = std::max(p.face_tolerance, 2.5 * 1.4826 * dev[kth(size / 2)].first);
+      col_sigma[c] = 1.4826 * dev[kth(size / 2)].first;
+      col_tol[c] = std::max(p.face_tolerance, 2.5 * col_sigma[c]);
     }
   }
   auto tolAt = [&](double s) {
@@ -460,6 +468,20 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       if (r > 0 && c > 0) front_diff[i] -= front_diff[i - (cols + 1) - 1];
       grid[static_cast<std::size_t>(r) * cols + c].front = front_diff[i];
     }
+  // Rays of an organized cloud cross every cell near enough: at most one
+  // cell size apart there. Farther, a cell without a return may lie between
+  // two of them (a 64-beam LiDAR's rings are 7 cm apart 6 m off, a 16-beam's
+  // 20 cm): not looked at, nothing told of it (lidar64 drive 1008: a plain
+  // wall 6 m off, its cells between rings taken as seen through, made a doorway).
+  auto sampled = [&](const Eigen::Vector3f& q) {
+    return !view || view->ray_spacing <= 0 ||
+           (q - view->viewpoint).norm() * view->ray_spacing <= std::min(row_h, cell);
+  };
+  auto cellCentre = [&](int c, int r) {
+    const Eigen::Vector2d xy = wall.point + (s_lo + (c + 0.5) * cell) * wall.direction;
+    return Eigen::Vector3f(static_cast<float>(xy.x()), static_cast<float>(xy.y()),
+                           static_cast<float>(floor_z + (r + 0.5) * row_h));
+  };
   // A camera frame: a cell on the wall's plane without any return whose
   // centre lies inside the view (between the lowest and the highest return
   // on its bearing) was looked at and nothing was there in range.
@@ -468,10 +490,8 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       for (int c = 0; c < cols; ++c) {
         Cell& g = grid[static_cast<std::size_t>(r) * cols + c];
         if (g.face || g.through || g.recess || g.front) continue;
-        const Eigen::Vector2d xy = wall.point + (s_lo + (c + 0.5) * cell) * wall.direction;
-        const Eigen::Vector3f q(static_cast<float>(xy.x()), static_cast<float>(xy.y()),
-                                static_cast<float>(floor_z + (r + 0.5) * row_h));
-        g.empty_in_view = view->inView(q, -kInViewMargin);
+        const Eigen::Vector3f q = cellCentre(c, r);
+        g.empty_in_view = view->inView(q, -kInViewMargin) && sampled(q);
       }
 
   // Column shares over the body of a door.
@@ -493,8 +513,18 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   }
   // Trim: most face points of the sub-column stand out of the wall (a corner
   // with another wall mixes points at all offsets and stays below).
+  // A mean offset of n face points stands out of the wall's noise (sigma of
+  // sub-column c's column) when it lies kLegZ standard errors out: a
+  // rotating LiDAR's 1.5-2 cm range noise puts the mean of the handful of
+  // points a ring leaves in a sub-column 8 mm out of the plane by chance,
+  // somewhere along every wall (lidar64 drive 1011: two such sub-columns a
+  // door's width apart made a closed door of a plain wall).
+  auto significant = [&](int c, double offset, int n) {
+    return offset * std::sqrt(static_cast<double>(n)) >= kLegZ * col_sigma[std::min(cols - 1, c / 2)];
+  };
   for (int c = 0; c < sub; ++c)
-    casing_share[c] = face_d_n[c] >= 5 && face_d_sum[c] / face_d_n[c] > p.casing_min_offset
+    casing_share[c] = face_d_n[c] >= 5 && face_d_sum[c] / face_d_n[c] > p.casing_min_offset &&
+                              significant(c, face_d_sum[c] / face_d_n[c], face_d_n[c])
                           ? static_cast<double>(face_d_out[c]) / face_d_n[c]
                           : 0.0;
   auto colS = [&](int c) { return s_lo + c * cell; };
@@ -563,7 +593,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     auto stands_out = [&](int c) {
       const double l = side(c - 7, c - 4), r = side(c + 4, c + 7);
       return std::isfinite(mean[c]) && std::isfinite(l) && std::isfinite(r) &&
-             mean[c] - std::max(l, r) >= p.casing_min_offset;
+             mean[c] - std::max(l, r) >= p.casing_min_offset && significant(c, mean[c] - std::max(l, r), face_d_n[c]);
     };
     for (int c = 0; c < sub;) {
       if (!stands_out(c)) {
@@ -640,7 +670,9 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
         const int w0 = (r - body1) * kFine + k;  // first fine row of the (slid) row
         if (w0 + kFine > fine_n) break;
         const HeadRow h = headRow(c0, c1, w0);
-        if (h.face >= 5 && h.out >= 0.7 * h.face && h.columns >= share * ncols) return 1;
+        // (with the offsets known, their mean stands out of the noise as a leg's must)
+        const bool stands_out = head_fine_d.empty() || significant(2 * ((c0 + c1) / 2), h.offset / h.face, h.face);
+        if (h.face >= 5 && h.out >= 0.7 * h.face && h.columns >= share * ncols && stands_out) return 1;
       }
     }
     return seen ? 0 : -1;
@@ -1018,12 +1050,13 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       for (int r = body0; r < body1; ++r) {
         const Cell& g = grid[static_cast<std::size_t>(r) * cols + c];
         ++n;
-        const bool through = g.through || (!g.face && !g.recess && !g.front && no_return_is_free);
+        const bool empty_seen = !g.face && !g.recess && !g.front && no_return_is_free && sampled(cellCentre(c, r));
+        const bool through = g.through || empty_seen;
         if (g.face) ++f;
         else if (g.through) ++t;
         else if (g.recess) ++re;
         else if (g.front) ++fr;
-        else if (no_return_is_free) ++t;  // a camera got nothing back in range: nothing is there
+        else if (empty_seen) ++t;  // a camera got nothing back in range: nothing is there
         low_through += through && r < low1;
       }
     d.low_through = low_through > 0;

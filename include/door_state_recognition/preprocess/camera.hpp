@@ -36,6 +36,13 @@ std::optional<Pinhole> fitPinhole(const pcl::PointCloud<pcl::PointXYZ>& cloud, c
 // The unit rays of the pixels without a return (every `step`-th row and
 // column), in the cloud's frame: empty when the camera is not of this cloud.
 Points noReturnRays(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Pinhole& camera, int step = 2);
+
+// The angle (rad) between neighbouring rays of an organized cloud, seen from
+// `viewpoint`: the median angle between pixels next to each other in a row
+// and in a column (each where both returned), the larger of the two. A depth
+// camera's pixels lie 0.1-0.2 deg apart; a rotating LiDAR's rings 0.35-2 deg.
+// 0 for an unorganized cloud or too few neighbours.
+double raySpacing(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vector3f& viewpoint);
 // The same with the camera fitted here (empty when none fits).
 Points noReturnRays(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vector3f& viewpoint, int step = 2);
 

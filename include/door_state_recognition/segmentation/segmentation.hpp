@@ -67,6 +67,10 @@ struct ViewTop {
   // Unit directions (from viewpoint) of a camera's pixels without a return:
   // nothing was in range along them (preprocess::noReturnRays); may be empty.
   std::vector<Eigen::Vector3f> no_return;
+  // The angle between neighbouring rays (rad, preprocess::raySpacing; 0:
+  // unknown): a cell without a return farther than cell / ray_spacing lies
+  // between rays (a LiDAR's rings), not looked at.
+  float ray_spacing = 0;
   int bin(const Eigen::Vector3f& q) const;
   float tanElevation(const Eigen::Vector3f& q) const;
   // Within what the sensor saw: a bearing with returns, between the lowest
