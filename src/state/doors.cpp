@@ -32,6 +32,15 @@ constexpr double kOwnLeafRms = 0.05;
 constexpr double kOwnLeafJamb = 0.15;
 // A door whose leaf was not seen (its angle a lower bound from free space).
 constexpr double kUnseenLeafConfidence = 0.3;
+// m: no wall holding a door is this thick (interior walls 0.1-0.3 m, heavy
+// outer walls up to about 0.4); cupboards and wardrobes are 0.5-0.7 m deep.
+constexpr double kMaxWallThickness = 0.45;
+// m: a leaf swung out of sight needs the space behind its doorway this much less deep than it reaches.
+constexpr double kRoomSlack = 0.1;
+// depthBeyond: what lies this far behind a wall's face (m) is seen through
+// it, up to kBeyondMax; at least kBeyondMinPoints such points tell the depth.
+constexpr double kBeyondMin = 0.05, kBeyondMax = 20.0;
+constexpr std::size_t kBeyondMinPoints = 30;
 // A wall whose inliers are more than this share another door's leaf is that leaf.
 constexpr double kLeafWallShare = 0.3;
 
@@ -161,6 +170,28 @@ bool mayBeOwnLeaf(const segmentation::Points& pts, const segmentation::WallPlane
   return std::min(std::abs(s_face - d.s0), std::abs(s_face - d.s1)) <= kOwnLeafJamb;
 }
 
+// How deep the space seen through a doorway is: the median distance behind
+// the wall's face (up to kBeyondMax) of the points whose sight lines from
+// the viewpoint cross the wall inside the doorway at body height; NaN when
+// fewer than kBeyondMinPoints do.
+double depthBeyond(const segmentation::Points& pts, const segmentation::WallPlane& wall, const recognition::Doorway& d,
+                   double floor_z, const Eigen::Vector3f& viewpoint) {
+  const double vs = wall.along(viewpoint), vd = wall.signedDistance(viewpoint), vz = viewpoint.z();
+  if (vd <= 0.1) return std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> depth;
+  for (const auto& q : pts) {
+    const double dd = wall.signedDistance(q);
+    if (dd > -kBeyondMin || dd < -kBeyondMax) continue;
+    const double t = vd / (vd - dd);  // where the sight line crosses the wall's plane
+    const double s_wall = vs + t * (wall.along(q) - vs), z_wall = vz + t * (q.z() - vz) - floor_z;
+    if (s_wall <= d.s0 + 0.05 || s_wall >= d.s1 - 0.05 || z_wall < 0.3 || z_wall > 1.75) continue;
+    depth.push_back(-dd);
+  }
+  if (depth.size() < kBeyondMinPoints) return std::numeric_limits<double>::quiet_NaN();
+  std::nth_element(depth.begin(), depth.begin() + depth.size() / 2, depth.end());
+  return depth[depth.size() / 2];
+}
+
 }  // namespace
 
 DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentation::WallPlane>& walls, double floor_z,
@@ -195,7 +226,11 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
   std::vector<Candidate> candidates;
   for (std::size_t wi = 0; wi < walls.size(); ++wi)
     for (const recognition::Doorway& d : doorways[wi]) candidates.push_back({wi, d, {}});
-  auto thicknessOf = [&](const recognition::Doorway& d) { return d.thickness > 0.04 ? d.thickness : p.default_wall_thickness; };
+  // A closed leaf lies within its wall's thickness; no wall is thicker than
+  // kMaxWallThickness (beside a gap between cupboards, their sides are).
+  auto thicknessOf = [&](const recognition::Doorway& d) {
+    return d.thickness > 0.04 ? std::min(d.thickness, kMaxWallThickness) : p.default_wall_thickness;
+  };
   parallelFor(candidates.size(), [&](std::size_t i) {
     Candidate& c = candidates[i];
     // Without trim, see-through or a deep recess only a closed leaf filling
@@ -240,9 +275,20 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       // for one: Stations.APartSeenThroughPastTheEndOfAWallSeenIsNoDoorway,
       // a false NOT_CLOSED door 0.3 m past such an end).
       const bool jambs = d.casing || (d.s0 >= wall.s_min - kWallEndSlack && d.s1 <= wall.s_max + kWallEndSlack);
+      // A leaf swung away out of sight stands beyond the bound, reaching
+      // width x sin(angle) behind the wall: the space seen through the
+      // doorway must be that deep (less kRoomSlack) at the bound or at
+      // 90 deg, whichever is less. A recess between two cupboards, with the
+      // room's wall 0.3-0.7 m behind their fronts, leaves no room for a leaf.
+      bool room_for_leaf = true;
+      if (!leaf.found && std::isfinite(leaf.free_from_deg)) {
+        const double beyond = depthBeyond(pts, wall, d, floor_z, viewpoint);
+        const double reach = (d.s1 - d.s0) * std::sin(std::min(leaf.free_from_deg, 90.0) * M_PI / 180);
+        room_for_leaf = !(beyond < reach - kRoomSlack);
+      }
       const bool open_unseen = !leaf.found && std::isfinite(leaf.free_from_deg) &&
                                leaf.free_from_deg >= std::max(p.unseen_leaf_min_bound_deg, p.closed_below_deg) &&
-                               leaf.free_from_deg <= 170 && jambs;
+                               leaf.free_from_deg <= 170 && jambs && room_for_leaf;
       if (!leaf.found) {
         char buf[512];
         std::snprintf(buf, sizeof buf,
@@ -252,7 +298,9 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
                       wi, d.s0, d.s1, d.casing, d.through, d.front, d.recess, d.top - floor_z, d.thickness,
                       leaf.searched ? "best" : "not searched, no evidence and wall band",
                       leaf.best_angle_deg, leaf.best_coverage, leaf.best_contradiction, leaf.candidate_points,
-                      leaf.candidate_rays, leaf.free_from_deg, open_unseen ? " | leaf unseen, reported at the bound" : "");
+                      leaf.candidate_rays, leaf.free_from_deg, open_unseen     ? " | leaf unseen, reported at the bound"
+                      : !room_for_leaf ? " | no room behind it for a leaf out of sight"
+                                       : "");
         out.trace.push_back(buf);
         if (!open_unseen) continue;
         // The leaf where the bound puts it, the doorway's width long.
