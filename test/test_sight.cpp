@@ -187,6 +187,8 @@ TEST(Sight, WithoutAViewpointBookcasesBesideDoorsAreNoDoors) {
   // stand 15-40 cm before the wall across its width, where nothing stands
   // before a door (state/doors.cpp, furnishedShare). Before that rule each
   // of these seeds reported one such false door (closed@2, semi_open@8).
+  // Since trim must stand out of the wall's noise (recognition.cpp, kLegZ),
+  // 1007's bookcase makes no candidate at all: the rule is needed on the others.
   const Pipeline pipe{Parameters()};
   sim::RandomSceneOptions room;
   room.clutter = true;
@@ -196,7 +198,7 @@ TEST(Sight, WithoutAViewpointBookcasesBesideDoorsAreNoDoors) {
     const eval::EvalResult e = m.score(r);
     bool furniture = false;  // the rule was needed: a candidate turned down as furniture
     for (const auto& t : r.trace) furniture |= t.find("(furniture)") != std::string::npos;
-    EXPECT_TRUE(furniture) << "seed " << seed;
+    if (seed != 1007) EXPECT_TRUE(furniture) << "seed " << seed;
     EXPECT_EQ(e.unmatched_report.size(), 0u) << "seed " << seed << ": reported" << doors(r);
     EXPECT_EQ(e.matched, e.true_doors) << "seed " << seed << ": reported" << doors(r);
   }

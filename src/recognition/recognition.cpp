@@ -211,6 +211,10 @@ constexpr std::size_t kSplitPoints = 20000;
 // leg or head stands out (by chance in one sub-column of about 30000; a
 // cloud's walls hold about a thousand, a drive a hundred clouds).
 constexpr double kLegZ = 4.0;
+// m either side of a column within which its wall's noise is taken where quietest.
+constexpr double kQuietReach = 1.0;
+// Rows (5 cm) above and below an empty cell between a LiDAR's rings looked at for the rings next to it.
+constexpr int kRingRows = 6;
 // Points a trim leg out of the plane needs where its neighbours are seen.
 constexpr int kLegMinPoints = 10;
 // Face points a head of trim needs across its doorway to be told by their
@@ -473,9 +477,17 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   // two of them (a 64-beam LiDAR's rings are 7 cm apart 6 m off, a 16-beam's
   // 20 cm): not looked at, nothing told of it (lidar64 drive 1008: a plain
   // wall 6 m off, its cells between rings taken as seen through, made a doorway).
-  auto sampled = [&](const Eigen::Vector3f& q) {
-    return !view || view->ray_spacing <= 0 ||
-           (q - view->viewpoint).norm() * view->ray_spacing <= std::min(row_h, cell);
+  // Between rings, a cell next to a ring that met the wall's face (in the
+  // rows within one ring spacing above and below, at most kRingRows) is that
+  // face, unsampled: not seen through.
+  auto sampled = [&](const Eigen::Vector3f& q, int c, int r) {
+    if (!view || view->ray_spacing <= 0) return true;
+    const double gap = (q - view->viewpoint).norm() * view->ray_spacing;
+    if (gap <= std::min(row_h, cell)) return true;
+    const int k = std::min(kRingRows, static_cast<int>(std::ceil(gap / row_h)));
+    for (int rr = std::max(0, r - k); rr <= std::min(rows - 1, r + k); ++rr)
+      if (grid[static_cast<std::size_t>(rr) * cols + c].face) return false;
+    return true;
   };
   auto cellCentre = [&](int c, int r) {
     const Eigen::Vector2d xy = wall.point + (s_lo + (c + 0.5) * cell) * wall.direction;
@@ -491,7 +503,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
         Cell& g = grid[static_cast<std::size_t>(r) * cols + c];
         if (g.face || g.through || g.recess || g.front) continue;
         const Eigen::Vector3f q = cellCentre(c, r);
-        g.empty_in_view = view->inView(q, -kInViewMargin) && sampled(q);
+        g.empty_in_view = view->inView(q, -kInViewMargin) && sampled(q, c, r);
       }
 
   // Column shares over the body of a door.
@@ -519,8 +531,18 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   // points a ring leaves in a sub-column 8 mm out of the plane by chance,
   // somewhere along every wall (lidar64 drive 1011: two such sub-columns a
   // door's width apart made a closed door of a plain wall).
+  // The noise is the wall's quietest metre within kQuietReach of the column:
+  // over a doorway the face's deviations hold its leaf and trim (sigma of
+  // 3 cm beside 1 cm, lidar64 3002), and the noise itself changes slowly with range.
+  std::vector<double> quiet_sigma(cols);
+  {
+    const int reach = std::max(1, static_cast<int>(std::lround(kQuietReach / cell)));
+    for (int c = 0; c < cols; ++c)
+      quiet_sigma[c] = *std::min_element(col_sigma.begin() + std::max(0, c - reach),
+                                         col_sigma.begin() + std::min(cols - 1, c + reach) + 1);
+  }
   auto significant = [&](int c, double offset, int n) {
-    return offset * std::sqrt(static_cast<double>(n)) >= kLegZ * col_sigma[std::min(cols - 1, c / 2)];
+    return offset * std::sqrt(static_cast<double>(n)) >= kLegZ * quiet_sigma[std::min(cols - 1, c / 2)];
   };
   for (int c = 0; c < sub; ++c)
     casing_share[c] = face_d_n[c] >= 5 && face_d_sum[c] / face_d_n[c] > p.casing_min_offset &&
@@ -1050,7 +1072,7 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
       for (int r = body0; r < body1; ++r) {
         const Cell& g = grid[static_cast<std::size_t>(r) * cols + c];
         ++n;
-        const bool empty_seen = !g.face && !g.recess && !g.front && no_return_is_free && sampled(cellCentre(c, r));
+        const bool empty_seen = !g.face && !g.recess && !g.front && no_return_is_free && sampled(cellCentre(c, r), c, r);
         const bool through = g.through || empty_seen;
         if (g.face) ++f;
         else if (g.through) ++t;
