@@ -88,12 +88,13 @@ Points noReturnRays(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Ve
   const std::optional<Pinhole> cam = fitPinhole(cloud, viewpoint);
   return cam ? noReturnRays(cloud, *cam, step) : Points();
 }
+
 double raySpacing(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vector3f& viewpoint) {
   const int w = static_cast<int>(cloud.width), h = static_cast<int>(cloud.height);
   if (h < 2 || w < 2 || cloud.size() != static_cast<std::size_t>(w) * h) return 0;
-  // About kSpacingPairs pixels looked at, spread over the image.
-  constexpr double kSpacingPairs = 20000;
-  const int step = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(w) * h / kSpacingPairs)));
+  // About kSpacingPixels pixels looked at, spread over the image.
+  constexpr double kSpacingPixels = 4000;
+  const int step = std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<double>(w) * h / kSpacingPixels))));
   auto dir = [&](int r, int c, Eigen::Vector3f* out) {
     const auto& q = cloud.points[static_cast<std::size_t>(r) * w + c];
     if (!std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z)) return false;
@@ -103,18 +104,19 @@ double raySpacing(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vect
     *out = d / n;
     return true;
   };
-  std::vector<double> along_row, along_column;
+  // Chords between unit directions, the median turned into an angle once.
+  std::vector<float> along_row, along_column;
   for (int r = 0; r + 1 < h; r += step)
     for (int c = 0; c + 1 < w; c += step) {
       Eigen::Vector3f a, b;
       if (!dir(r, c, &a)) continue;
-      if (dir(r, c + 1, &b)) along_row.push_back(std::acos(std::clamp(static_cast<double>(a.dot(b)), -1.0, 1.0)));
-      if (dir(r + 1, c, &b)) along_column.push_back(std::acos(std::clamp(static_cast<double>(a.dot(b)), -1.0, 1.0)));
+      if (dir(r, c + 1, &b)) along_row.push_back((a - b).norm());
+      if (dir(r + 1, c, &b)) along_column.push_back((a - b).norm());
     }
-  auto median = [](std::vector<double>& v) {
+  auto median = [](std::vector<float>& v) {
     if (v.size() < 20) return 0.0;
     std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    return v[v.size() / 2];
+    return 2 * std::asin(std::min(1.0, v[v.size() / 2] / 2.0));
   };
   return std::max(median(along_row), median(along_column));
 }

@@ -523,14 +523,12 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
     face[c] = enough ? static_cast<double>(f) / observed : (f > 0 ? 1.0 : 0.0);
     expl[c] = enough ? static_cast<double>(e) / observed : 0.0;
   }
-  // Trim: most face points of the sub-column stand out of the wall (a corner
-  // with another wall mixes points at all offsets and stays below).
-  // A mean offset of n face points stands out of the wall's noise (sigma of
-  // sub-column c's column) when it lies kLegZ standard errors out: a
-  // rotating LiDAR's 1.5-2 cm range noise puts the mean of the handful of
-  // points a ring leaves in a sub-column 8 mm out of the plane by chance,
-  // somewhere along every wall (lidar64 drive 1011: two such sub-columns a
-  // door's width apart made a closed door of a plain wall).
+  // A mean offset of n face points stands out of the wall's noise when it
+  // lies kLegZ standard errors out: a rotating LiDAR's 1.5-2 cm range noise
+  // puts the mean of the handful of points a ring leaves in a sub-column
+  // 8 mm out of the plane by chance, somewhere along every wall (lidar64
+  // drive 1011: two such sub-columns a door's width apart made a closed
+  // door of a plain wall).
   // The noise is the wall's quietest metre within kQuietReach of the column:
   // over a doorway the face's deviations hold its leaf and trim (sigma of
   // 3 cm beside 1 cm, lidar64 3002), and the noise itself changes slowly with range.
@@ -544,6 +542,8 @@ std::vector<Doorway> findDoorways(const Points& points, const segmentation::Wall
   auto significant = [&](int c, double offset, int n) {
     return offset * std::sqrt(static_cast<double>(n)) >= kLegZ * quiet_sigma[std::min(cols - 1, c / 2)];
   };
+  // Trim: most face points of the sub-column stand out of the wall (a corner
+  // with another wall mixes points at all offsets and stays below).
   for (int c = 0; c < sub; ++c)
     casing_share[c] = face_d_n[c] >= 5 && face_d_sum[c] / face_d_n[c] > p.casing_min_offset &&
                               significant(c, face_d_sum[c] / face_d_n[c], face_d_n[c])

@@ -280,15 +280,16 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       // doorway must be that deep (less kRoomSlack) at the bound or at
       // 90 deg, whichever is less. A recess between two cupboards, with the
       // room's wall 0.3-0.7 m behind their fronts, leaves no room for a leaf.
+      const bool bounded = !leaf.found && std::isfinite(leaf.free_from_deg) &&
+                           leaf.free_from_deg >= std::max(p.unseen_leaf_min_bound_deg, p.closed_below_deg) &&
+                           leaf.free_from_deg <= 170 && jambs;
       bool room_for_leaf = true;
-      if (!leaf.found && std::isfinite(leaf.free_from_deg)) {
+      if (bounded) {
         const double beyond = depthBeyond(pts, wall, d, floor_z, viewpoint);
         const double reach = (d.s1 - d.s0) * std::sin(std::min(leaf.free_from_deg, 90.0) * M_PI / 180);
         room_for_leaf = !(beyond < reach - kRoomSlack);
       }
-      const bool open_unseen = !leaf.found && std::isfinite(leaf.free_from_deg) &&
-                               leaf.free_from_deg >= std::max(p.unseen_leaf_min_bound_deg, p.closed_below_deg) &&
-                               leaf.free_from_deg <= 170 && jambs && room_for_leaf;
+      const bool open_unseen = bounded && room_for_leaf;
       if (!leaf.found) {
         char buf[512];
         std::snprintf(buf, sizeof buf,
