@@ -1089,11 +1089,7 @@ DriveOptions fastDrive(const std::string& sensor, std::uint64_t seed) {
     o.lidar = l;
   } else {
     RgbdOptions r;
-    r.width = 80;
-    r.height = 60;
-    r.fx = r.fy = 65.625;
-    r.cx = 39.5;
-    r.cy = 29.5;
+    r.resize(80, 60);
     o.rgbd = r;
   }
   return o;
@@ -1311,11 +1307,7 @@ SimulatedCloud frameFrom(const Scene& s, const Eigen::Vector3d& eye, const Eigen
   pose.linear() << x, z.cross(x), z;  // optical frame: x right, y down, z forward
   pose.translation() = eye;
   RgbdOptions o;
-  o.width = 320;
-  o.height = 240;
-  o.fx = o.fy = 262.5;
-  o.cx = 159.5;
-  o.cy = 119.5;
+  o.resize(320, 240);
   o.max_range = 10;
   o.noise = false;
   o.dropout = 0;
@@ -1401,11 +1393,7 @@ TEST(Simulator, LeafInViewAgreesWithTheLeafPointsOfRobotCameraFrames) {
     o.robot_camera = true;
     o.noise = false;
     o.dropout = 0;
-    o.width = 320;
-    o.height = 240;
-    o.fx = o.fy = 262.5;
-    o.cx = 159.5;
-    o.cy = 119.5;
+    o.resize(320, 240);
     const SimulatedCloud c = captureRgbd(s, o);
     const nlohmann::json t = groundTruthJson(s, c);
     for (std::size_t k = 0; k < s.doors.size(); ++k) {

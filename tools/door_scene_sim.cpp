@@ -218,12 +218,7 @@ int main(int argc, char** argv) {
       } else if (a == "--resolution") {
         const std::string r = value();
         if (r != "640x480" && r != "320x240") throw UsageError("--resolution must be 640x480 or 320x240");
-        const double scale = r == "320x240" ? 0.5 : 1.0;
-        rgbd.width = static_cast<int>(640 * scale);
-        rgbd.height = static_cast<int>(480 * scale);
-        rgbd.fx = rgbd.fy = 525.0 * scale;
-        rgbd.cx = (rgbd.width - 1) / 2.0;
-        rgbd.cy = (rgbd.height - 1) / 2.0;
+        if (r == "320x240") rgbd.resize(320, 240);
         rgbd_option = true;
       } else if (a == "--camera-height") {
         rgbd.camera_height = toDouble(a, value());
@@ -351,13 +346,7 @@ int main(int argc, char** argv) {
       drive_options.mount_height = mount_height;
       if (beams > 0) drive_options.lidar = lidar;
       else {
-        if (rgbd_size != "640x480") {
-          rgbd.width = 320;
-          rgbd.height = 240;
-          rgbd.fx = rgbd.fy = 262.5;
-          rgbd.cx = 159.5;
-          rgbd.cy = 119.5;
-        }
+        if (rgbd_size != "640x480") rgbd.resize(320, 240);
         drive_options.rgbd = rgbd;
       }
       sim::DrivePlan plan = sim::planDrive(spec, drive_options);

@@ -269,11 +269,7 @@ DrivePlan planDrive(const RoomSpec& spec, const DriveOptions& options) {
     plan.sensor_to_base.translation() = Eigen::Vector3d(0.1, 0, height);
     if (!o.rgbd) {
       RgbdOptions r;
-      r.width = 320;
-      r.height = 240;
-      r.fx = r.fy = 262.5;
-      r.cx = 159.5;
-      r.cy = 119.5;
+      r.resize(320, 240);
       o.rgbd = r;
     }
   }

@@ -53,6 +53,13 @@ struct RgbdOptions {
   std::optional<Eigen::Isometry3d> camera_to_world;
   std::uint64_t seed = 1;
   DepthModel depth_model = DepthModel::Default;
+  // The same camera at another image size (a fraction of 640 x 480): the
+  // intrinsics scaled with it, the principal point in the image's middle.
+  void resize(int w, int h) {
+    fx = fy = 525.0 * w / 640.0;
+    width = w, height = h;
+    cx = (w - 1) / 2.0, cy = (h - 1) / 2.0;
+  }
   // Not the default model: the share of leaves and of furniture pieces that
   // are dark (or glossy), drawn per piece by the seed.
   double dark_fraction = 0.35;
