@@ -7,7 +7,9 @@ precision, recall, state accuracy (over every door found; over the measured
 leaves alone), how many doors were reported not_closed (found, never a right
 state), bound errors (a lower bound above the true angle), opening-angle mean
 absolute error (with the error of measured angles alone and the number of lower
-bounds), median hinge error. Each sweep's JSON and per-seed lines go to $DSR_BUILD/eval/NAME.json
+bounds), median hinge error, and of the true doors whose leaf the sensor saw
+(half of it or more, the truth's leaf_in_view; laser scans and camera frames)
+the share found in the right state. Each sweep's JSON and per-seed lines go to $DSR_BUILD/eval/NAME.json
 and NAME.log (simulated clouds are deleted).
 
   scripts/eval_table.py [NAME ...]      (make eval; EVAL_SWEEPS="a b" selects)
@@ -85,6 +87,14 @@ def sweep_args(name, config_dir):
     return args
 
 
+def seen(m):
+    """The doors whose leaf was in sight (eval_sweep's leaf_seen): the share found in the right state."""
+    s = m.get("leaf_seen")
+    if not s or not s["true_doors"]:
+        return "-"
+    return f"{s['state_correct'] / s['true_doors']:.2f} ({s['state_correct']}/{s['true_doors']})"
+
+
 def main():
     if any(a in ("-h", "--help") for a in sys.argv[1:]):
         print(__doc__.strip())
@@ -93,8 +103,8 @@ def main():
     out = BUILD / "eval"
     out.mkdir(parents=True, exist_ok=True)
     print(f"| sweep ({os.environ.get('EVAL_SCENES', 30)} scenes) | P | R | state (measured) | not_closed | bound errors | "
-          "angle MAE (measured; bounds) | median hinge |")
-    print("|---|---|---|---|---|---|---|---|")
+          "angle MAE (measured; bounds) | median hinge | right, leaf seen |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for name in names:
         work = Path(tempfile.mkdtemp(prefix=f"dsr_eval_{name}_"))
         try:
@@ -112,7 +122,7 @@ def main():
               f"{f(m['state_accuracy'], '%.2f')} ({f(m.get('state_accuracy_measured'), '%.2f')}) | "
               f"{m.get('not_closed') or 0} | {m.get('bound_errors') or 0} | {f(m['angle_mae_deg'], '%.1f')} deg "
               f"({f(m['angle_mae_measured_deg'], '%.1f')}; {m['angle_lower_bounds'] or 0}) | "
-              f"{f(m['hinge_error_median_m'] and 100 * m['hinge_error_median_m'], '%.1f')} cm |", flush=True)
+              f"{f(m['hinge_error_median_m'] and 100 * m['hinge_error_median_m'], '%.1f')} cm | {seen(m)} |", flush=True)
 
 
 if __name__ == "__main__":

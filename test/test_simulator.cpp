@@ -1380,7 +1380,7 @@ TEST(Simulator, RgbdTruthSeesADoorwayAndALeafOnlyWithAClearSightLine) {
 
 // Over random rooms with furniture, from robot camera poses: a door whose
 // leaf the truth calls unseen shows (next to) no leaf point in the frame, one
-// with half its leaf seen shows many; a TLS sees every door and gets no share.
+// with half its leaf seen shows many.
 TEST(Simulator, LeafInViewAgreesWithTheLeafPointsOfRobotCameraFrames) {
   RandomSceneOptions ro;
   ro.clutter = true;
@@ -1413,10 +1413,34 @@ TEST(Simulator, LeafInViewAgreesWithTheLeafPointsOfRobotCameraFrames) {
   }
   EXPECT_GE(unseen, 3);
   EXPECT_GE(half, 3);
+}
+
+// Issue 19: a laser scan's truth says how much of each leaf its stations
+// saw. From inside the room a leaf swung into it is seen whole; one swung
+// 100 deg away stands behind the wall beside its doorway, seen by no
+// station inside (its leaf points few), until a station beyond the door
+// joins the scan (a survey of two stations, merged or not).
+TEST(Simulator, TlsTruthTellsTheShareOfALeafAnyStationSaw) {
   TlsOptions to;
-  to.points = 20000;
-  const nlohmann::json t = groundTruthJson(buildScene(oneDoorRoom(30.0, true, true, 0.0)),
-                                           scanTls(buildScene(oneDoorRoom(30.0, true, true, 0.0)), to));
+  to.points = 100000;
+  to.seed = 19;
+  const Scene toward = buildScene(oneDoorRoom(30.0, true, true, 0.0));
+  const SimulatedCloud ct = scanTls(toward, to);
+  const nlohmann::json t = groundTruthJson(toward, ct);
   EXPECT_TRUE(t["doors"][0]["in_view"].get<bool>());
-  EXPECT_FALSE(t["doors"][0].contains("leaf_in_view"));
+  EXPECT_GT(t["doors"][0]["leaf_in_view"].get<double>(), 0.9);
+  EXPECT_GT(leafPointsOf(toward, ct, 0), 1000u);
+
+  const Scene away = buildScene(oneDoorRoom(100.0, true, false, 0.0));
+  const SimulatedCloud ca = scanTls(away, to);
+  const double inside = groundTruthJson(away, ca)["doors"][0]["leaf_in_view"].get<double>();
+  EXPECT_LT(inside, 0.2);
+  const std::size_t leaf_inside = leafPointsOf(away, ca, 0);
+  EXPECT_LT(leaf_inside, 200u);
+  TlsOptions both = to;
+  both.beyond_doors = true;
+  const SimulatedCloud cb = scanTls(away, both);
+  ASSERT_EQ(cb.viewpoints_world.size(), 2u);
+  EXPECT_GT(groundTruthJson(away, cb)["doors"][0]["leaf_in_view"].get<double>(), inside + 0.5);
+  EXPECT_GT(leafPointsOf(away, cb, 0), 3 * leaf_inside + 300);
 }

@@ -160,7 +160,7 @@ EvalResult evaluate(const json& truth, const json& report, double max_center_dis
     for (std::size_t i = 0; i < t.size(); ++i) {
       const std::string w = "truth.doors[" + std::to_string(i) + "]";
       const auto it = arr[i].find("leaf_in_view");
-      if (it == arr[i].end()) fail(w + ".leaf_in_view", "missing field (RGB-D frame truth only)");
+      if (it == arr[i].end()) fail(w + ".leaf_in_view", "missing field (truth of RGB-D frames and laser scans only)");
       if (number(*it, w + ".leaf_in_view") < min_leaf_in_view) t[i].out_of_view = true;
     }
   }

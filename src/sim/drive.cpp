@@ -15,6 +15,9 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
+// A leaf cell a terrestrial scanner sees at a steeper incidence gets a few
+// points at most (leafInViewShare).
+constexpr double kTlsMaxIncidenceDeg = 80.0;
 
 void require(bool ok, const std::string& what) {
   if (!ok) throw std::invalid_argument("drive: " + what);
@@ -464,28 +467,37 @@ bool sensorSeesDoor(const Scene& scene, const SimulatedCloud& cloud, int door) {
 }
 
 double leafInViewShare(const Scene& scene, const SimulatedCloud& cloud, int door) {
-  if (cloud.lidar_beams > 0 || cloud.sensor != "rgbd") return 0.0;
+  const bool camera = cloud.sensor == "rgbd" && cloud.lidar_beams == 0, tls = cloud.sensor == "tls";
+  if (!camera && !tls) return 0.0;
   if (door < 0 || door >= static_cast<int>(scene.doors.size())) return 0.0;
   const DoorTruth& d = scene.doors[door];
   const Eigen::Isometry3d W2S = cloud.sensor_to_world.inverse();
-  const Eigen::Vector3d origin = cloud.sensor_to_world.translation();
+  // A camera's one origin; a terrestrial scanner's every station (a merged
+  // or mesh-like export keeps them in viewpoints_world).
+  std::vector<Eigen::Vector3d> origins = tls ? cloud.viewpoints_world : std::vector<Eigen::Vector3d>{};
+  if (origins.empty()) origins.push_back(cloud.sensor_to_world.translation());
   const auto& c = d.leaf_corners;  // mid-thickness: hinge-bottom, latch-bottom, latch-top, hinge-top
   const Eigen::Vector3d across = c[1] - c[0], up = c[3] - c[0];
   const Eigen::Vector3d n = across.cross(up).normalized();
-  const double cos_max = std::cos(cloud.rgbd.max_incidence_deg * kDeg);
+  const double cos_max = std::cos((camera ? cloud.rgbd.max_incidence_deg : kTlsMaxIncidenceDeg) * kDeg);
   constexpr int kAcross = 8, kUp = 16;  // cells of about 11 x 13 cm on a 0.9 x 2 m leaf
   int seen = 0;
   for (int i = 0; i < kAcross; ++i)
     for (int j = 0; j < kUp; ++j) {
       const Eigen::Vector3d mid = c[0] + across * ((i + 0.5) / kAcross) + up * ((j + 0.5) / kUp);
-      // The point on the face turned to the camera.
-      const Eigen::Vector3d p = mid + n * (n.dot(origin - mid) >= 0 ? 0.5 : -0.5) * scene.spec.leaf_thickness;
-      if (!inImage(cloud.rgbd, W2S * p)) continue;
-      const double dist = (p - origin).norm();
-      const Eigen::Vector3d dir = (p - origin) / dist;
-      if (std::abs(n.dot(dir)) < cos_max) continue;  // too grazing: the camera returns nothing there
-      const RayHit hit = castRay(scene, origin, dir, dist + 0.01);
-      seen += hit.hit && (hit.surface == Surface::Leaf || hit.surface == Surface::Handle) && hit.owner == door;
+      for (const Eigen::Vector3d& origin : origins) {
+        // The point on the face turned to the sensor.
+        const Eigen::Vector3d p = mid + n * (n.dot(origin - mid) >= 0 ? 0.5 : -0.5) * scene.spec.leaf_thickness;
+        if (camera && !inImage(cloud.rgbd, W2S * p)) continue;
+        const double dist = (p - origin).norm();
+        const Eigen::Vector3d dir = (p - origin) / dist;
+        if (std::abs(n.dot(dir)) < cos_max) continue;  // too grazing: the sensor returns (next to) nothing there
+        const RayHit hit = castRay(scene, origin, dir, dist + 0.01);
+        if (hit.hit && (hit.surface == Surface::Leaf || hit.surface == Surface::Handle) && hit.owner == door) {
+          ++seen;
+          break;
+        }
+      }
     }
   return static_cast<double>(seen) / (kAcross * kUp);
 }

@@ -48,7 +48,7 @@ nlohmann::json groundTruthJson(const Scene& scene, const SimulatedCloud& cloud) 
     const int k = static_cast<int>(&d - scene.doors.data());
     const bool camera = cloud.sensor == "rgbd" && cloud.lidar_beams == 0;
     door["in_view"] = camera || cloud.lidar_beams > 0 ? sensorSeesDoor(scene, cloud, k) : true;
-    if (camera) door["leaf_in_view"] = leafInViewShare(scene, cloud, k);
+    if (camera || cloud.sensor == "tls") door["leaf_in_view"] = leafInViewShare(scene, cloud, k);
     nlohmann::json corners = nlohmann::json::array();
     for (const auto& c : d.leaf_corners) corners.push_back(vec(W2S * c));
     door["leaf_corners"] = corners;

@@ -64,8 +64,8 @@ struct EvalResult {
 // With in_view_only, truth doors marked "in_view": false (outside a camera's
 // view) are left out: neither missed, nor a false positive when reported.
 // With min_leaf_in_view >= 0 (at most 1), so are truth doors whose
-// "leaf_in_view" (the share of the leaf a camera sees, RGB-D truth) is below
-// it; a truth door without that field is an error then. Negative: unused.
+// "leaf_in_view" (the share of the leaf the sensor sees: truth of RGB-D
+// frames and laser scans) is below it; a truth door without that field is an error then. Negative: unused.
 EvalResult evaluate(const nlohmann::json& truth, const nlohmann::json& report,
                     double max_center_distance_m = 0.5, bool in_view_only = false,
                     double min_leaf_in_view = -1.0);

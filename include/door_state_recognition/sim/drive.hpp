@@ -103,11 +103,14 @@ std::vector<DriveFrame> simulateDrive(const RoomSpec& spec, const DriveOptions& 
 // sees door `door` of `scene`: LiDAR as lidarSeesDoor; RGB-D when a point of
 // the doorway projects into the image within range with a clear sight line.
 bool sensorSeesDoor(const Scene& scene, const SimulatedCloud& cloud, int door);
-// RGB-D only (else 0): the share, 0..1, of door `door`'s leaf the camera of
-// `cloud` sees: 8 x 16 points on the leaf's face turned to the camera (cell
-// centres of the rectangle leaf_corners span), each counted when it projects
-// into the image within range, at an incidence the camera returns
-// (max_incidence_deg) and the ray to it first hits that door's leaf or handle.
+// RGB-D and TLS (else 0): the share, 0..1, of door `door`'s leaf the sensor
+// of `cloud` sees: 8 x 16 points on the leaf's face turned to the sensor
+// (cell centres of the rectangle leaf_corners span), each counted when the
+// ray to it first hits that door's leaf or handle at an incidence the sensor
+// returns (a camera's max_incidence_deg, 80 deg for a TLS) and, for a
+// camera, it projects into the image within range. A TLS cloud of several
+// stations (a survey, a merged or mesh-like export) counts a point seen from
+// any of its viewpoints_world.
 double leafInViewShare(const Scene& scene, const SimulatedCloud& cloud, int door);
 
 // Ground truth of the drive, every coordinate in map: groundTruthJson of the

@@ -15,7 +15,8 @@ namespace sim {
 // "floor"/"ceiling" are heights along "up" in the cloud frame (p . up).
 // Door states use closed < 5 deg <= semi_open < 90 deg <= open.
 // Each door's "in_view": sensorSeesDoor (sim/drive.hpp; true for a TLS);
-// RGB-D only, "leaf_in_view": leafInViewShare, the share of the leaf seen.
+// RGB-D and TLS, "leaf_in_view": leafInViewShare, the share of the leaf seen
+// (a TLS: from any of its stations).
 nlohmann::json groundTruthJson(const Scene& scene, const SimulatedCloud& cloud);
 
 }  // namespace sim
