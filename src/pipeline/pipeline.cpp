@@ -55,6 +55,17 @@ const char* toString(DoorStateKind s) {
   return "closed";
 }
 
+bool sameLeaf(const DoorResult& a, const DoorResult& b) {
+  return (a.hinge - b.hinge).norm() < 0.2 && std::abs(a.leaf_line_direction.dot(b.leaf_line_direction)) > 0.95;
+}
+
+bool surerReport(const DoorResult& a, const DoorResult& b) {
+  if (a.angle_is_lower_bound != b.angle_is_lower_bound) return !a.angle_is_lower_bound;
+  if (a.angle_is_lower_bound) return a.opening_angle_deg > b.opening_angle_deg;
+  if (a.casing != b.casing && (a.opening_center - b.opening_center).norm() > 0.4 && sameLeaf(a, b)) return a.casing;
+  return a.confidence > b.confidence;
+}
+
 double clearWidth(double width, double angle_deg, double leaf_thickness, double closed_below_deg) {
   if (!std::isfinite(width) || !std::isfinite(angle_deg) || !std::isfinite(leaf_thickness) || width <= 0 ||
       angle_deg < closed_below_deg)

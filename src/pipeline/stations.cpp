@@ -61,15 +61,6 @@ void unionCorners(WallResult& into, const WallResult& other, const Eigen::Matrix
   for (Eigen::Vector3d& c : into.corners) c = Rt * c;
 }
 
-// Which of two reports of one door to keep: a leaf measured over one whose
-// angle is only bounded; then the surer; of two bounds the larger (each is a
-// true lower bound, so the larger is the tighter).
-bool better(const DoorResult& a, const DoorResult& b) {
-  if (a.angle_is_lower_bound != b.angle_is_lower_bound) return !a.angle_is_lower_bound;
-  if (a.angle_is_lower_bound) return a.opening_angle_deg > b.opening_angle_deg;
-  return a.confidence > b.confidence;
-}
-
 }  // namespace
 
 PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool with_reconstruction) const {
@@ -209,9 +200,14 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
   // door sees the wall's other face). A leaf's shadow
   // beside its doorway, or a leaf fitted from the wrong jamb, taken from
   // another station for a doorway of its own, overlaps the true one (5023,
-  // 1011 seen from beyond a door).
+  // 1011 seen from beyond a door). Or one leaf claimed by doorways on either
+  // side of its hinge (sameLeaf): the wall in the shadow of a leaf swung
+  // towards a station, taken for a doorway that holds the same leaf, where
+  // trim frames one of the two doorways only (surerReport keeps that one;
+  // with no trim to tell them apart both stay: mesh40k-clutter 2022 lost the
+  // true door to the surer shadow).
   auto same = [&](const DoorResult& o, const DoorResult& d) {
-    if ((o.opening_center - d.opening_center).norm() < kSameDoor) return true;
+    if ((o.opening_center - d.opening_center).norm() < kSameDoor || (o.casing != d.casing && sameLeaf(o, d))) return true;
     if (!o.wall_id || !d.wall_id) return false;
     const Line2 &Lo = lines[*o.wall_id], &Ld = lines[*d.wall_id];
     if (std::abs(Lo.dir.dot(Ld.dir)) < kWallParallelCos) return false;
@@ -231,7 +227,7 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
   const std::vector<std::vector<std::size_t>> groups = stations::groupReports(
       report_station, [&](std::size_t i, std::size_t j) { return same(reports[i], reports[j]); },
       [&](std::size_t i, std::size_t j) { return (reports[i].opening_center - reports[j].opening_center).norm(); });
-  // Of each door's reports the best (better()). (A station's free-space
+  // Of each door's reports the best (surerReport). (A station's free-space
   // bound is not a hard limit for a leaf measured from another: it assumes
   // that station's jambs and hinge. Replacing a measured leaf more than 5 deg
   // below another station's bound by the bound lost four correct doors in
@@ -239,7 +235,7 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
   for (const std::vector<std::size_t>& g : groups) {
     const DoorResult* best = &reports[g.front()];
     for (std::size_t i : g)
-      if (better(reports[i], *best)) best = &reports[i];
+      if (surerReport(reports[i], *best)) best = &reports[i];
     res.doors.push_back(*best);
   }
   res.doors.erase(std::remove_if(res.doors.begin(), res.doors.end(),

@@ -418,19 +418,16 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       door.wall_line_direction = toInput(Eigen::Vector3d(wall.direction.x(), wall.direction.y(), 0));
       door.leaf_line_point = door.hinge;
       door.leaf_line_direction = toInput(Eigen::Vector3d(leaf.direction.x(), leaf.direction.y(), 0));
+      door.casing = d.casing;
       // The same doorway found from two overlapping wall hypotheses, or the
       // same leaf claimed by two doorways (a leaf's shadow beside its own
-      // doorway looks like one): keep the surer one, a leaf measured before
-      // one bounded (whose confidence is a fixed 0.3; runStations ranks alike).
+      // doorway looks like one): keep the surer one (surerReport, as
+      // runStations ranks them).
       bool duplicate = false;
       for (DoorResult& other : out.doors)
-        if ((other.opening_center - door.opening_center).norm() < 0.4 ||
-            ((other.hinge - door.hinge).norm() < 0.2 &&
-             std::abs(other.leaf_line_direction.dot(door.leaf_line_direction)) > 0.95)) {
+        if ((other.opening_center - door.opening_center).norm() < 0.4 || sameLeaf(other, door)) {
           duplicate = true;
-          const bool surer = door.angle_is_lower_bound != other.angle_is_lower_bound ? !door.angle_is_lower_bound
-                                                                                     : door.confidence > other.confidence;
-          if (surer) other = door;
+          if (surerReport(door, other)) other = door;
         }
       if (duplicate) continue;
       for (int i : leaf.inliers) out.is_leaf[i] = 1;

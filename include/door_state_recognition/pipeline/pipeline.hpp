@@ -62,6 +62,10 @@ struct DoorResult {
   double clear_width = 0;
   std::array<Eigen::Vector3d, 4> leaf_corners;  // hinge-bottom, latch-bottom, latch-top, hinge-top
   Swing swing = Swing::Unknown;
+  // Trim (casing) was seen around the doorway: its legs stand out of the
+  // wall's face at both jambs. What tells the door's own doorway from the
+  // wall beside it when both claim one leaf (surerReport).
+  bool casing = false;
   // Fitted lines on the floor plane (the paper's 3.3.2), for display.
   Eigen::Vector3d wall_line_point, wall_line_direction, leaf_line_point, leaf_line_direction;
 };
@@ -76,6 +80,19 @@ struct DoorResult {
 // and 0 for a closed door (angle < closed_below_deg). At 90 deg: width -
 // leaf_thickness; at 180: width. Non-finite or negative input gives 0.
 double clearWidth(double width, double angle_deg, double leaf_thickness, double closed_below_deg);
+
+// Two reports claim one leaf: hinges within 0.2 m and leaves parallel
+// (within 18 deg). A leaf swung towards the sensor hides the wall beside
+// its hinge, which then looks like a doorway of its own holding the same
+// leaf at 180 deg less its angle.
+bool sameLeaf(const DoorResult& a, const DoorResult& b);
+// Of two reports of one door (or of one leaf), whether `a` is the one to
+// keep over `b`: a leaf measured over one only bounded; of two bounds the
+// larger (each is a true lower bound); where the two claim one leaf from
+// doorways on either side of its hinge (centres more than 0.4 m apart), the
+// doorway framed by trim (`casing`: a door's own mark; the wall beside the
+// hinge has none); else the surer (confidence).
+bool surerReport(const DoorResult& a, const DoorResult& b);
 
 // The state of a door whose leaf was not seen and whose angle free space
 // bounds from below at `bound_deg`: NotClosed below open_from_deg, Open from it.
