@@ -156,25 +156,33 @@ class RangeSphere {
     const int ke = static_cast<int>(std::ceil((alpha * cos_el + alpha * alpha) / bin_)) + 1;
     const int ka = std::min(na_ / 2, static_cast<int>(std::ceil(alpha / (bin_ * std::max(cos_el, 0.02f)))));
     const bool oriented = n.squaredNorm() > 0.5f;
-    for (int de = -ke; de <= ke; ++de) {
-      const int e = e0 + de;
-      if (e < 0 || e >= ne_) continue;
-      const float ce = cos_el_[e], se = sin_el_[e];
-      for (int da = -ka; da <= ka; ++da) {
-        const int a = ((a0 + da) % na_ + na_) % na_;
+    const float dn_d = d.dot(n), r2 = radius * radius;
+    // Columns a0 - ka .. a0 + ka (ka <= na_ / 2) as at most three runs
+    // without wrapping (a bin met twice keeps its minimum); a bin whose
+    // nearest range is already no farther is passed over before the disk test.
+    auto run = [&](float* row, float ce, float se, int from, int to) {
+      for (int a = from; a <= to; ++a) {
         const Eigen::Vector3f ray(ce * cos_az_[a], ce * sin_az_[a], se);
         float t = r;
         if (oriented) {
           const float dn = ray.dot(n);
           if (std::abs(dn) < 0.05f) continue;  // edge-on: the disk covers no area of this bin
-          t = d.dot(n) / dn;
-          if (!(t > 0) || (ray * t - d).squaredNorm() > radius * radius) continue;
-        } else if ((ray * r - d).squaredNorm() > radius * radius) {
+          t = dn_d / dn;
+          if (!(t > 0) || !(t < row[a]) || (ray * t - d).squaredNorm() > r2) continue;
+        } else if (!(t < row[a]) || (ray * r - d).squaredNorm() > r2) {
           continue;
         }
-        float& z = z_[static_cast<std::size_t>(e) * na_ + a];
-        z = std::min(z, t);
+        row[a] = t;
       }
+    };
+    for (int de = -ke; de <= ke; ++de) {
+      const int e = e0 + de;
+      if (e < 0 || e >= ne_) continue;
+      float* row = z_.data() + static_cast<std::size_t>(e) * na_;
+      int lo = a0 - ka, hi = a0 + ka;
+      if (lo < 0) run(row, cos_el_[e], sin_el_[e], lo + na_, na_ - 1), lo = 0;
+      if (hi >= na_) run(row, cos_el_[e], sin_el_[e], 0, hi - na_), hi = na_ - 1;
+      run(row, cos_el_[e], sin_el_[e], lo, hi);
     }
   }
 
@@ -281,11 +289,52 @@ InferredStations inferStations(const pcl::PointCloud<pcl::PointXYZ>& cloud, cons
       int i, j;
       if (std::abs(x.z() - zs) <= 0.6f && cellOf(x.x(), x.y(), i, j)) occupied[static_cast<std::size_t>(j) * nx + i] = 1;
     }
+    // Free: only points in a band a little wider than kClearance around
+    // the height can be that close; they are bucketed in columns of that
+    // width, and a candidate tests the 3x3 columns around it.
+    constexpr float kReach = kClearance + 0.01f;
+    std::vector<Eigen::Vector3f> band;
+    Eigen::Vector2f blo = Eigen::Vector2f::Constant(std::numeric_limits<float>::max()), bhi = -blo;
+    for (const auto& x : lev.p)
+      if (std::abs(x.z() - zs) <= kReach) {
+        band.push_back(x);
+        blo = blo.cwiseMin(x.head<2>());
+        bhi = bhi.cwiseMax(x.head<2>());
+      }
+    const int bx = band.empty() ? 1 : static_cast<int>((bhi.x() - blo.x()) / kReach) + 1;
+    const int by = band.empty() ? 1 : static_cast<int>((bhi.y() - blo.y()) / kReach) + 1;
+    auto column = [&](const Eigen::Vector3f& x, int& i, int& j) {
+      i = static_cast<int>(std::floor((x.x() - blo.x()) / kReach));
+      j = static_cast<int>(std::floor((x.y() - blo.y()) / kReach));
+    };
+    std::vector<std::size_t> start(static_cast<std::size_t>(bx) * by + 1, 0);
+    std::vector<Eigen::Vector3f> bucketed(band.size());
+    {
+      std::vector<std::size_t> col(band.size());
+      for (std::size_t k = 0; k < band.size(); ++k) {
+        int i, j;
+        column(band[k], i, j);
+        col[k] = static_cast<std::size_t>(std::clamp(j, 0, by - 1)) * bx + std::clamp(i, 0, bx - 1);
+        ++start[col[k] + 1];
+      }
+      for (std::size_t k = 1; k < start.size(); ++k) start[k] += start[k - 1];
+      std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+      for (std::size_t k = 0; k < band.size(); ++k) bucketed[fill[col[k]]++] = band[k];
+    }
+    auto clearAt = [&](const Eigen::Vector3f& c) {
+      int ci, cj;
+      column(c, ci, cj);
+      for (int j = std::max(0, cj - 1); j <= std::min(by - 1, cj + 1); ++j)
+        for (int i = std::max(0, ci - 1); i <= std::min(bx - 1, ci + 1); ++i) {
+          const std::size_t b = static_cast<std::size_t>(j) * bx + i;
+          for (std::size_t k = start[b]; k < start[b + 1]; ++k)
+            if (!((bucketed[k] - c).squaredNorm() > kClearance * kClearance)) return false;
+        }
+      return true;
+    };
     std::vector<Eigen::Vector3f> kept;
     for (const auto& c : cand) {
-      bool clear = true;
-      for (std::size_t i = 0; i < lev.p.size() && clear; ++i) clear = (lev.p[i] - c).squaredNorm() > kClearance * kClearance;
-      if (!clear) continue;
+      if (!clearAt(c)) continue;
       int enclosed = 0;
       for (int r = 0; r < kRays; ++r) {
         const float a = static_cast<float>(2 * kPi * r / kRays), dx = std::cos(a) * kCell / 2, dy = std::sin(a) * kCell / 2;
