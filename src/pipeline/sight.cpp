@@ -175,9 +175,15 @@ class RangeSphere {
         row[a] = t;
       }
     };
+    // Of those rows, only the ones a ray meeting the disk can lie in: such
+    // a ray is within beta = asin(radius / r) of u, so its z (the row's
+    // sin el) within beta cos el + beta^2 / 2 of u's (with a margin for
+    // rounding); the rows beyond hold no bin the disk is met in.
+    const float beta = radius < r ? 1.0001f * std::asin(radius / r) : 4.0f;
+    const float dz = beta * cos_el + 0.5f * beta * beta + 1e-4f;
     for (int de = -ke; de <= ke; ++de) {
       const int e = e0 + de;
-      if (e < 0 || e >= ne_) continue;
+      if (e < 0 || e >= ne_ || std::abs(sin_el_[e] - u.z()) > dz) continue;
       float* row = z_.data() + static_cast<std::size_t>(e) * na_;
       int lo = a0 - ka, hi = a0 + ka;
       if (lo < 0) run(row, cos_el_[e], sin_el_[e], lo + na_, na_ - 1), lo = 0;
