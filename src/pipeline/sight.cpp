@@ -181,11 +181,26 @@ class RangeSphere {
     // rounding); the rows beyond hold no bin the disk is met in.
     const float beta = radius < r ? 1.0001f * std::asin(radius / r) : 4.0f;
     const float dz = beta * cos_el + 0.5f * beta * beta + 1e-4f;
+    // And in a row of cos el c, only the columns such a ray can lie in: its
+    // azimuth differs from u's by D with sin(D / 2) <= sin(beta / 2) /
+    // sqrt(cos el c) <= s, so D <= 2 asin(s) <= 2 s / sqrt(1 - s^2); u lies
+    // at `frac` of its column a0.
+    const float pos = (fastAtan2(u.y(), u.x()) + static_cast<float>(kPi)) / bin_, frac = pos - std::floor(pos);
     for (int de = -ke; de <= ke; ++de) {
       const int e = e0 + de;
       if (e < 0 || e >= ne_ || std::abs(sin_el_[e] - u.z()) > dz) continue;
       float* row = z_.data() + static_cast<std::size_t>(e) * na_;
       int lo = a0 - ka, hi = a0 + ka;
+      const float cc = cos_el * cos_el_[e];
+      if (cc > 1e-6f) {
+        const float s = 0.5f * beta / std::sqrt(cc);
+        if (s < 0.5f) {
+          const float reach = (2 * s / std::sqrt(1 - s * s) + 1e-3f) / bin_;
+          lo = std::max(lo, a0 + static_cast<int>(std::ceil(frac - 0.5f - reach)));
+          hi = std::min(hi, a0 + static_cast<int>(std::floor(frac - 0.5f + reach)));
+          if (lo > hi) continue;
+        }
+      }
       if (lo < 0) run(row, cos_el_[e], sin_el_[e], lo + na_, na_ - 1), lo = 0;
       if (hi >= na_) run(row, cos_el_[e], sin_el_[e], 0, hi - na_), hi = na_ - 1;
       run(row, cos_el_[e], sin_el_[e], lo, hi);
