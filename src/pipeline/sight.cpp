@@ -124,21 +124,26 @@ class RangeSphere {
   // Range of x's first surface along its ray (infinity: none).
   float nearest(const Eigen::Vector3f& x) const {
     const Eigen::Vector3f d = x - o_;
-    const float r = d.norm();
-    if (!(r > 1e-6f)) return std::numeric_limits<float>::infinity();
-    return z_[index(bins(d / r))];
+    return nearestAt(d, d.norm());
   }
   bool hidden(const Eigen::Vector3f& x) const {
-    const float r = (x - o_).norm();
-    return nearest(x) < r - (kHiddenAbs + kHiddenRel * r);
+    const Eigen::Vector3f d = x - o_;
+    const float r = d.norm();
+    return nearestAt(d, r) < r - (kHiddenAbs + kHiddenRel * r);
   }
 
  private:
+  // The same for d = x - origin, r = |d|.
+  float nearestAt(const Eigen::Vector3f& d, float r) const {
+    if (!(r > 1e-6f)) return std::numeric_limits<float>::infinity();
+    return z_[index(bins(d / r))];
+  }
   std::pair<int, int> bins(const Eigen::Vector3f& u) const {
     const float az = fastAtan2(u.y(), u.x());
     int a = static_cast<int>(std::floor((az + static_cast<float>(kPi)) / bin_));
     int e = static_cast<int>(std::floor((u.z() + 1) / bin_));
-    a = ((a % na_) + na_) % na_;
+    if (a >= na_ && a < 2 * na_) a -= na_;  // az = pi: the first column again
+    else if (a < 0 || a >= na_) a = ((a % na_) + na_) % na_;
     e = std::clamp(e, 0, ne_ - 1);
     return {a, e};
   }
