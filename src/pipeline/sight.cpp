@@ -163,21 +163,25 @@ class RangeSphere {
     const bool oriented = n.squaredNorm() > 0.5f;
     const float dn_d = d.dot(n), r2 = radius * radius;
     // Columns a0 - ka .. a0 + ka (ka <= na_ / 2) as at most three runs
-    // without wrapping (a bin met twice keeps its minimum); a bin whose
-    // nearest range is already no farther is passed over before the disk test.
+    // without wrapping (a bin met twice keeps its minimum). Without
+    // branches: every bin's test is worked out, and the bin takes t where
+    // the disk is met nearer than its nearest range so far.
     auto run = [&](float* row, float ce, float se, int from, int to) {
-      for (int a = from; a <= to; ++a) {
-        const Eigen::Vector3f ray(ce * cos_az_[a], ce * sin_az_[a], se);
-        float t = r;
-        if (oriented) {
+      if (oriented) {
+        for (int a = from; a <= to; ++a) {
+          const Eigen::Vector3f ray(ce * cos_az_[a], ce * sin_az_[a], se);
           const float dn = ray.dot(n);
-          if (std::abs(dn) < 0.05f) continue;  // edge-on: the disk covers no area of this bin
-          t = dn_d / dn;
-          if (!(t > 0) || !(t < row[a]) || (ray * t - d).squaredNorm() > r2) continue;
-        } else if (!(t < row[a]) || (ray * r - d).squaredNorm() > r2) {
-          continue;
+          const float t = dn_d / dn;
+          // not edge-on (there the disk covers no area of the bin), ahead, nearer, on the disk
+          const bool met = !(std::abs(dn) < 0.05f) & (t > 0) & (t < row[a]) & !((ray * t - d).squaredNorm() > r2);
+          row[a] = met ? t : row[a];
         }
-        row[a] = t;
+      } else {
+        for (int a = from; a <= to; ++a) {
+          const Eigen::Vector3f ray(ce * cos_az_[a], ce * sin_az_[a], se);
+          const bool met = (r < row[a]) & !((ray * r - d).squaredNorm() > r2);
+          row[a] = met ? r : row[a];
+        }
       }
     };
     // Of those rows, only the ones a ray meeting the disk can lie in: such
