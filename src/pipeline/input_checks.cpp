@@ -31,11 +31,13 @@ std::optional<std::string> implausibleInput(const pcl::PointCloud<pcl::PointXYZ>
   std::size_t k = 0, at_sensor = 0;
   for (const auto& p : cloud.points) {
     if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) continue;
-    const double r = (p.getVector3fMap() - vp).norm();
-    at_sensor += r < 1e-3;
+    // The range's root only where it is used: a point at the sensor (below
+    // 1 mm, so its square below 1e-5) and a sampled one.
+    const float r2 = (p.getVector3fMap() - vp).squaredNorm();
+    if (r2 < 1e-5f) at_sensor += static_cast<double>(std::sqrt(r2)) < 1e-3;
     z_min = std::min(z_min, p.z);
     z_max = std::max(z_max, p.z);
-    if (k++ % stride == 0) range.push_back(r);
+    if (k++ % stride == 0) range.push_back(std::sqrt(r2));
   }
   char buf[300];
   if (at_sensor * 100 >= finite * 99) {
@@ -68,14 +70,19 @@ std::optional<std::string> singleSurface(const std::vector<Eigen::Vector3f>& poi
                                          bool up_given) {
   // The dominant direction of the normals (sign-free), and the share of
   // points whose normal lies within 10 deg of it.
-  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  // (The six sums of the symmetric matrix as scalars: each product of two
+  // floats is exact in double, so these are the sums of C += n n^T.)
+  double cxx = 0, cxy = 0, cxz = 0, cyy = 0, cyz = 0, czz = 0;
   std::size_t n = 0;
   for (const auto& nf : normals)
     if (nf.norm() > 0.5f) {
-      C += nf.cast<double>() * nf.cast<double>().transpose();
+      const double x = nf.x(), y = nf.y(), z = nf.z();
+      cxx += x * x, cxy += x * y, cxz += x * z, cyy += y * y, cyz += y * z, czz += z * z;
       ++n;
     }
   if (n < 100) return std::nullopt;
+  Eigen::Matrix3d C;
+  C << cxx, cxy, cxz, cxy, cyy, cyz, cxz, cyz, czz;
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
   const Eigen::Vector3f e = es.eigenvectors().col(2).cast<float>();
   const float cos10 = std::cos(10.0f * 3.14159265f / 180.0f);

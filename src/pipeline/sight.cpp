@@ -124,21 +124,26 @@ class RangeSphere {
   // Range of x's first surface along its ray (infinity: none).
   float nearest(const Eigen::Vector3f& x) const {
     const Eigen::Vector3f d = x - o_;
-    const float r = d.norm();
-    if (!(r > 1e-6f)) return std::numeric_limits<float>::infinity();
-    return z_[index(bins(d / r))];
+    return nearestAt(d, d.norm());
   }
   bool hidden(const Eigen::Vector3f& x) const {
-    const float r = (x - o_).norm();
-    return nearest(x) < r - (kHiddenAbs + kHiddenRel * r);
+    const Eigen::Vector3f d = x - o_;
+    const float r = d.norm();
+    return nearestAt(d, r) < r - (kHiddenAbs + kHiddenRel * r);
   }
 
  private:
+  // The same for d = x - origin, r = |d|.
+  float nearestAt(const Eigen::Vector3f& d, float r) const {
+    if (!(r > 1e-6f)) return std::numeric_limits<float>::infinity();
+    return z_[index(bins(d / r))];
+  }
   std::pair<int, int> bins(const Eigen::Vector3f& u) const {
     const float az = fastAtan2(u.y(), u.x());
     int a = static_cast<int>(std::floor((az + static_cast<float>(kPi)) / bin_));
     int e = static_cast<int>(std::floor((u.z() + 1) / bin_));
-    a = ((a % na_) + na_) % na_;
+    if (a >= na_ && a < 2 * na_) a -= na_;  // az = pi: the first column again
+    else if (a < 0 || a >= na_) a = ((a % na_) + na_) % na_;
     e = std::clamp(e, 0, ne_ - 1);
     return {a, e};
   }
@@ -156,25 +161,58 @@ class RangeSphere {
     const int ke = static_cast<int>(std::ceil((alpha * cos_el + alpha * alpha) / bin_)) + 1;
     const int ka = std::min(na_ / 2, static_cast<int>(std::ceil(alpha / (bin_ * std::max(cos_el, 0.02f)))));
     const bool oriented = n.squaredNorm() > 0.5f;
+    const float dn_d = d.dot(n), r2 = radius * radius;
+    // Columns a0 - ka .. a0 + ka (ka <= na_ / 2) as at most three runs
+    // without wrapping (a bin met twice keeps its minimum). Without
+    // branches: every bin's test is worked out, and the bin takes t where
+    // the disk is met nearer than its nearest range so far.
+    auto run = [&](float* row, float ce, float se, int from, int to) {
+      if (oriented) {
+        for (int a = from; a <= to; ++a) {
+          const Eigen::Vector3f ray(ce * cos_az_[a], ce * sin_az_[a], se);
+          const float dn = ray.dot(n);
+          const float t = dn_d / dn;
+          // not edge-on (there the disk covers no area of the bin), ahead, nearer, on the disk
+          const bool met = !(std::abs(dn) < 0.05f) & (t > 0) & (t < row[a]) & !((ray * t - d).squaredNorm() > r2);
+          row[a] = met ? t : row[a];
+        }
+      } else {
+        for (int a = from; a <= to; ++a) {
+          const Eigen::Vector3f ray(ce * cos_az_[a], ce * sin_az_[a], se);
+          const bool met = (r < row[a]) & !((ray * r - d).squaredNorm() > r2);
+          row[a] = met ? r : row[a];
+        }
+      }
+    };
+    // Of those rows, only the ones a ray meeting the disk can lie in: such
+    // a ray is within beta = asin(radius / r) of u, so its z (the row's
+    // sin el) within beta cos el + beta^2 / 2 of u's (with a margin for
+    // rounding); the rows beyond hold no bin the disk is met in.
+    const float beta = radius < r ? 1.0001f * std::asin(radius / r) : 4.0f;
+    const float dz = beta * cos_el + 0.5f * beta * beta + 1e-4f;
+    // And in a row of cos el c, only the columns such a ray can lie in: its
+    // azimuth differs from u's by D with sin(D / 2) <= sin(beta / 2) /
+    // sqrt(cos el c) <= s, so D <= 2 asin(s) <= 2 s / sqrt(1 - s^2); u lies
+    // at `frac` of its column a0.
+    const float pos = (fastAtan2(u.y(), u.x()) + static_cast<float>(kPi)) / bin_, frac = pos - std::floor(pos);
     for (int de = -ke; de <= ke; ++de) {
       const int e = e0 + de;
-      if (e < 0 || e >= ne_) continue;
-      const float ce = cos_el_[e], se = sin_el_[e];
-      for (int da = -ka; da <= ka; ++da) {
-        const int a = ((a0 + da) % na_ + na_) % na_;
-        const Eigen::Vector3f ray(ce * cos_az_[a], ce * sin_az_[a], se);
-        float t = r;
-        if (oriented) {
-          const float dn = ray.dot(n);
-          if (std::abs(dn) < 0.05f) continue;  // edge-on: the disk covers no area of this bin
-          t = d.dot(n) / dn;
-          if (!(t > 0) || (ray * t - d).squaredNorm() > radius * radius) continue;
-        } else if ((ray * r - d).squaredNorm() > radius * radius) {
-          continue;
+      if (e < 0 || e >= ne_ || std::abs(sin_el_[e] - u.z()) > dz) continue;
+      float* row = z_.data() + static_cast<std::size_t>(e) * na_;
+      int lo = a0 - ka, hi = a0 + ka;
+      const float cc = cos_el * cos_el_[e];
+      if (cc > 1e-6f) {
+        const float s = 0.5f * beta / std::sqrt(cc);
+        if (s < 0.5f) {
+          const float reach = (2 * s / std::sqrt(1 - s * s) + 1e-3f) / bin_;
+          lo = std::max(lo, a0 + static_cast<int>(std::ceil(frac - 0.5f - reach)));
+          hi = std::min(hi, a0 + static_cast<int>(std::floor(frac - 0.5f + reach)));
+          if (lo > hi) continue;
         }
-        float& z = z_[static_cast<std::size_t>(e) * na_ + a];
-        z = std::min(z, t);
       }
+      if (lo < 0) run(row, cos_el_[e], sin_el_[e], lo + na_, na_ - 1), lo = 0;
+      if (hi >= na_) run(row, cos_el_[e], sin_el_[e], 0, hi - na_), hi = na_ - 1;
+      run(row, cos_el_[e], sin_el_[e], lo, hi);
     }
   }
 
@@ -281,11 +319,52 @@ InferredStations inferStations(const pcl::PointCloud<pcl::PointXYZ>& cloud, cons
       int i, j;
       if (std::abs(x.z() - zs) <= 0.6f && cellOf(x.x(), x.y(), i, j)) occupied[static_cast<std::size_t>(j) * nx + i] = 1;
     }
+    // Free: only points in a band a little wider than kClearance around
+    // the height can be that close; they are bucketed in columns of that
+    // width, and a candidate tests the 3x3 columns around it.
+    constexpr float kReach = kClearance + 0.01f;
+    std::vector<Eigen::Vector3f> band;
+    Eigen::Vector2f blo = Eigen::Vector2f::Constant(std::numeric_limits<float>::max()), bhi = -blo;
+    for (const auto& x : lev.p)
+      if (std::abs(x.z() - zs) <= kReach) {
+        band.push_back(x);
+        blo = blo.cwiseMin(x.head<2>());
+        bhi = bhi.cwiseMax(x.head<2>());
+      }
+    const int bx = band.empty() ? 1 : static_cast<int>((bhi.x() - blo.x()) / kReach) + 1;
+    const int by = band.empty() ? 1 : static_cast<int>((bhi.y() - blo.y()) / kReach) + 1;
+    auto column = [&](const Eigen::Vector3f& x, int& i, int& j) {
+      i = static_cast<int>(std::floor((x.x() - blo.x()) / kReach));
+      j = static_cast<int>(std::floor((x.y() - blo.y()) / kReach));
+    };
+    std::vector<std::size_t> start(static_cast<std::size_t>(bx) * by + 1, 0);
+    std::vector<Eigen::Vector3f> bucketed(band.size());
+    {
+      std::vector<std::size_t> col(band.size());
+      for (std::size_t k = 0; k < band.size(); ++k) {
+        int i, j;
+        column(band[k], i, j);
+        col[k] = static_cast<std::size_t>(std::clamp(j, 0, by - 1)) * bx + std::clamp(i, 0, bx - 1);
+        ++start[col[k] + 1];
+      }
+      for (std::size_t k = 1; k < start.size(); ++k) start[k] += start[k - 1];
+      std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+      for (std::size_t k = 0; k < band.size(); ++k) bucketed[fill[col[k]]++] = band[k];
+    }
+    auto clearAt = [&](const Eigen::Vector3f& c) {
+      int ci, cj;
+      column(c, ci, cj);
+      for (int j = std::max(0, cj - 1); j <= std::min(by - 1, cj + 1); ++j)
+        for (int i = std::max(0, ci - 1); i <= std::min(bx - 1, ci + 1); ++i) {
+          const std::size_t b = static_cast<std::size_t>(j) * bx + i;
+          for (std::size_t k = start[b]; k < start[b + 1]; ++k)
+            if (!((bucketed[k] - c).squaredNorm() > kClearance * kClearance)) return false;
+        }
+      return true;
+    };
     std::vector<Eigen::Vector3f> kept;
     for (const auto& c : cand) {
-      bool clear = true;
-      for (std::size_t i = 0; i < lev.p.size() && clear; ++i) clear = (lev.p[i] - c).squaredNorm() > kClearance * kClearance;
-      if (!clear) continue;
+      if (!clearAt(c)) continue;
       int enclosed = 0;
       for (int r = 0; r < kRays; ++r) {
         const float a = static_cast<float>(2 * kPi * r / kRays), dx = std::cos(a) * kCell / 2, dy = std::sin(a) * kCell / 2;
