@@ -44,6 +44,13 @@ constexpr double kGapUnknown = 0.1;
 // cos 15 deg: planes closer to parallel than this may shadow one another.
 constexpr double kNearParallel = 0.966;
 
+// sin 5 deg: a plane passing closer than this share of the range of its
+// nearest point to the viewpoint is seen at more than 85 deg incidence
+// everywhere. Range sensors return almost nothing from a surface that
+// grazing: such a "wall" is a sheet of mixed (flying) pixels strung along
+// the rays past a depth edge, not a surface.
+constexpr double kEdgeOnShare = 0.087;
+
 namespace {
 
 // SelfAdjointEigenSolver<Matrix3d>::computeDirect as Eigen 3.4 runs it (its
@@ -500,6 +507,15 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
     through = nt * 0.05;
     unknown = static_cast<double>(nu) / bins;
   };
+  // Seen edge-on from the viewpoint along all its length (kEdgeOnShare).
+  auto edgeOn = [&](const WallPlane& w) {
+    if (!viewpoint) return false;
+    const double vd = std::abs((*viewpoint - point).dot(normal));
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const int i : w.inliers)
+      nearest = std::min(nearest, (Eigen::Vector2d(points[i].x(), points[i].y()) - *viewpoint).squaredNorm());
+    return vd < kEdgeOnShare * std::sqrt(nearest);
+  };
   // Split along the wall at gaps wider than wall_gap.
   // (Many inliers: in two halves at once.)
   std::vector<std::pair<double, int>> along(inliers.size());
@@ -590,7 +606,7 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
     // wall must also be longer than any door.
     const double min_length = ceiling_known ? p.min_wall_length : std::max(p.min_wall_length, p.door_max_width + 0.1);
     if (static_cast<int>(w.inliers.size()) >= p.min_wall_points && w.s_max - w.s_min >= min_length && tall &&
-        reaches_top && !shadowed)
+        reaches_top && !shadowed && !edgeOn(w))
       walls.push_back(std::move(w));
   }
 }
