@@ -51,6 +51,20 @@ constexpr double kNearParallel = 0.966;
 // the rays past a depth edge, not a surface.
 constexpr double kEdgeOnShare = 0.087;
 
+// Of a wall's surface not hidden from the viewpoint (by what stands in
+// front of it), at least this share holds points: each point within
+// kFillBand of its plane taken for the patch of surface a sensor's ray (or
+// the voxel grid, where coarser) gives one point on. A wall is one
+// continuous surface; a "wall" joined from scattered pieces (the edges of
+// furniture and of the room beyond seen through a doorway, flying pixels
+// between them) has a few per cent to a third of what it shows covered.
+constexpr double kMinWallFill = 0.5;
+// Points this close to the plane count for it (depth noise of a few
+// centimetres at a few metres spreads a wall's points that far).
+constexpr double kFillBand = 0.1;
+// The lowest this high above the floor are left out (the floor's own points).
+constexpr double kFillAboveFloor = 0.15;
+
 namespace {
 
 // SelfAdjointEigenSolver<Matrix3d>::computeDirect as Eigen 3.4 runs it (its
@@ -516,6 +530,50 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
       nearest = std::min(nearest, (Eigen::Vector2d(points[i].x(), points[i].y()) - *viewpoint).squaredNorm());
     return vd < kEdgeOnShare * std::sqrt(nearest);
   };
+  // Too few points on the surface it shows (kMinWallFill), where the
+  // sensor's ray spacing is known (an organized cloud: one return per ray,
+  // on the plane, in front of it or beyond).
+  auto sparse = [&](const WallPlane& w) {
+    if (!view || view->ray_spacing <= 0) return false;
+    const double z0 = floor_z + kFillAboveFloor, area = (w.s_max - w.s_min) * (w.z_max - z0);
+    if (area <= 0) return false;
+    const double voxel2 = p.voxel_size * p.voxel_size, spacing = view->ray_spacing;
+    const Eigen::Vector3d v = view->viewpoint.cast<double>();
+    const double vd = (Eigen::Vector2d(v.x(), v.y()) - point).dot(normal);
+    // The patch a ray meets the plane in, at x (t: x's range over the range
+    // of the point that stands for it, whose voxel it spreads by t).
+    auto patch = [&](const Eigen::Vector3d& x, double t) {
+      const Eigen::Vector3d r = x - v;
+      const double range = r.norm();
+      const double cos_inc = std::max(0.1, std::abs(r.x() * normal.x() + r.y() * normal.y()) / std::max(range, 1e-6));
+      return std::max(voxel2 * t * t, range * spacing * range * spacing / cos_inc);
+    };
+    auto inBox = [&](const Eigen::Vector3d& x) {
+      const double sv = (Eigen::Vector2d(x.x(), x.y()) - point).dot(direction);
+      return sv >= w.s_min && sv <= w.s_max && x.z() >= z0 && x.z() <= w.z_max;
+    };
+    // Its inliers alone often suffice (they lie within the band, none hidden).
+    double covered = 0;
+    for (const int i : w.inliers) {
+      const Eigen::Vector3d x = points[i].cast<double>();
+      if (inBox(x)) covered += patch(x, 1.0);
+    }
+    if (covered >= kMinWallFill * area) return false;
+    covered = 0;
+    double hidden = 0;
+    for (const auto& q : points) {
+      const double d = (Eigen::Vector2d(q.x(), q.y()) - point).dot(normal);
+      if (std::abs(d) <= kFillBand) {
+        const Eigen::Vector3d x = q.cast<double>();
+        if (inBox(x)) covered += patch(x, 1.0);
+      } else if (d > kFillBand && d < vd) {  // in front: hides where its ray meets the plane
+        const double t = vd / (vd - d);
+        const Eigen::Vector3d x = v + t * (q.cast<double>() - v);
+        if (inBox(x)) hidden += patch(x, t);
+      }
+    }
+    return covered < kMinWallFill * std::max(area - hidden, 0.0);
+  };
   // Split along the wall at gaps wider than wall_gap.
   // (Many inliers: in two halves at once.)
   std::vector<std::pair<double, int>> along(inliers.size());
@@ -606,7 +664,7 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
     // wall must also be longer than any door.
     const double min_length = ceiling_known ? p.min_wall_length : std::max(p.min_wall_length, p.door_max_width + 0.1);
     if (static_cast<int>(w.inliers.size()) >= p.min_wall_points && w.s_max - w.s_min >= min_length && tall &&
-        reaches_top && !shadowed && !edgeOn(w))
+        reaches_top && !shadowed && !edgeOn(w) && !sparse(w))
       walls.push_back(std::move(w));
   }
 }
