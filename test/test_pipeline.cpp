@@ -968,42 +968,6 @@ TEST(DoorState, AWallJoinedFromScatteredPiecesIsNoWall) {
   }
 }
 
-TEST(DoorState, ALeafThatIsAnotherWallsFaceRunningOnPastItsHingeIsNoLeaf) {
-  // Time-of-flight frame 1012 from a robot's camera (tuning seed): RANSAC
-  // joined a few pieces in front of the door's wall into a plane meeting
-  // that wall at right angles, and the wall's own face from the meeting on
-  // was taken for a leaf open 90 deg hinged there (a false door). A leaf
-  // ends at its hinge; that "leaf" runs on past it as the wall it is. The
-  // true door (open 126 deg) is kept; the rule must not take the true leaf
-  // of stereo frame 1024 (open 103 deg), which a plane through the room
-  // beyond shares but does not run on past its hinge.
-  struct Frame {
-    std::uint64_t seed;
-    sim::DepthModel model;
-  };
-  for (const Frame f : {Frame{1012, sim::DepthModel::TimeOfFlight}, Frame{1024, sim::DepthModel::ActiveStereo}}) {
-    SCOPED_TRACE(::testing::Message() << "seed=" << f.seed << " model=" << sim::toString(f.model));
-    const sim::Scene scene = sim::buildScene(sim::randomRoom(f.seed));
-    sim::RgbdOptions o;
-    o.seed = f.seed;
-    o.depth_model = f.model;
-    o.robot_camera = true;
-    const sim::SimulatedCloud frame = sim::captureRgbd(scene, o);
-    Parameters p;
-    p.up_axis = "-y";
-    const PipelineResult r = Pipeline(p).run(xyz(frame.cloud), false);
-    const eval::EvalResult e = eval::evaluate(sim::groundTruthJson(scene, frame), io::reportJson(r, "sim"), 0.5, true);
-    std::string trace;
-    for (const auto& l : r.trace) trace += l + "\n";
-    EXPECT_EQ(e.matched, 1) << trace;
-    EXPECT_EQ(e.state_correct, 1) << trace;
-    if (f.seed == 1012)
-      EXPECT_NE(trace.find("rejected: its leaf is another wall's face"), std::string::npos) << trace;
-    for (const DoorResult& d : r.doors)
-      EXPECT_FALSE(d.state == DoorStateKind::SemiOpen && std::abs(d.opening_angle_deg - 90) < 2) << trace;
-  }
-}
-
 TEST(DoorState, CameraFramesFindTheDoorInView) {
   // 12 simulated 640x480 RGB-D frames (camera optical frame, up -y, no
   // ceiling in view), the camera looking at one door of a random room. Held at

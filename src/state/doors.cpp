@@ -43,17 +43,6 @@ constexpr double kBeyondMin = 0.05, kBeyondMax = 20.0;
 constexpr std::size_t kBeyondMinPoints = 30;
 // A wall whose inliers are more than this share another door's leaf is that leaf.
 constexpr double kLeafWallShare = 0.3;
-// And a leaf more than this share of whose points are the inliers of
-// another wall whose face runs on past the leaf's hinge (its points there,
-// kPastHinge beyond it, at least kPastHingeDensity of the leaf's density
-// along it) is that wall's face: a plane RANSAC joined through a few pieces
-// in front of a wall (the edges of furniture, flying pixels) meets the wall
-// at an angle, and the wall's face from the meeting on looks like a leaf
-// hinged there. A leaf ends at its hinge, in its doorway's jamb: even swung
-// flat against a wall beside the doorway, what lies on past its hinge is
-// the jamb and the room beyond it, not more of a face.
-constexpr double kLeafIsWallShare = 0.5;
-constexpr double kPastHinge0 = 0.05, kPastHinge1 = 0.3, kPastHingeDensity = 0.3;
 
 // f(0) ... f(n - 1) over the cores (OpenMP), each at most once; the first
 // exception thrown is rethrown here (none may escape an OpenMP region).
@@ -268,10 +257,6 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       if (again.found) c.leaf = again;
     }
   });
-  // Each point's wall (walls hold disjoint inliers), -1 for none.
-  std::vector<int> wall_of(pts.size(), -1);
-  for (std::size_t wi = 0; wi < walls.size(); ++wi)
-    for (int i : walls[wi].inliers) wall_of[i] = static_cast<int>(wi);
   for (const Candidate& cand : candidates) {
     {
       const std::size_t wi = cand.wall;
@@ -386,23 +371,6 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       std::size_t on_leaf = 0;
       for (int i : wall.inliers) on_leaf += out.is_leaf[i];
       const bool own_wall = on_leaf <= kLeafWallShare * wall.inliers.size();
-      bool own_leaf = true;
-      if (leaf.coverage > 0 && !leaf.inliers.empty()) {
-        std::vector<std::size_t> votes(walls.size(), 0);
-        for (int i : leaf.inliers)
-          if (wall_of[i] >= 0 && wall_of[i] != static_cast<int>(wi)) ++votes[wall_of[i]];
-        const std::size_t w = std::max_element(votes.begin(), votes.end()) - votes.begin();
-        if (votes[w] > kLeafIsWallShare * leaf.inliers.size()) {
-          const Eigen::Vector2d perp(-leaf.direction.y(), leaf.direction.x());
-          std::size_t past = 0;
-          for (int i : walls[w].inliers) {
-            const Eigen::Vector2d r(pts[i].x() - leaf.hinge.x(), pts[i].y() - leaf.hinge.y());
-            const double a = -r.dot(leaf.direction);
-            past += a >= kPastHinge0 && a <= kPastHinge1 && std::abs(r.dot(perp)) <= p.wall_distance;
-          }
-          own_leaf = past < kPastHingeDensity * (kPastHinge1 - kPastHinge0) * votes[w] / std::max(0.1, leaf.length);
-        }
-      }
       {
         char buf[512];
         std::snprintf(buf, sizeof buf,
@@ -416,11 +384,10 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
                       : !free_foot ? "rejected: foot hidden by something right in front"
                       : !clear_way ? "rejected: something stands before it across its width (furniture)"
                       : !tall ? "rejected: too low" : !wide ? "rejected: width"
-                      : !own_wall ? "rejected: its wall is another door's leaf"
-                      : !own_leaf ? "rejected: its leaf is another wall's face" : "door");
+                      : !own_wall ? "rejected: its wall is another door's leaf" : "door");
         out.trace.push_back(buf);
       }
-      if (!evidence || !free_foot || !clear_way || !tall || !wide || !own_wall || !own_leaf) continue;
+      if (!evidence || !free_foot || !clear_way || !tall || !wide || !own_wall) continue;
 
       DoorResult door;
       door.wall_id = static_cast<int>(wi);
