@@ -62,6 +62,26 @@ Scored runScene(const sim::RoomSpec& spec, std::uint64_t seed, const std::string
   return s;
 }
 
+// A robot camera's frame (door_scene_sim --sensor rgbd --robot-camera
+// --depth-model M [--clutter]) run as `--up -y`, scored on the doors in view.
+Scored runRobotFrame(std::uint64_t seed, sim::DepthModel model, bool clutter) {
+  sim::RandomSceneOptions ro;
+  ro.clutter = clutter;
+  const sim::Scene scene = sim::buildScene(sim::randomRoom(seed, ro));
+  sim::RgbdOptions o;
+  o.seed = seed;
+  o.depth_model = model;
+  o.robot_camera = true;
+  const sim::SimulatedCloud frame = sim::captureRgbd(scene, o);
+  Parameters p;
+  p.up_axis = "-y";
+  Scored s;
+  s.truth = sim::groundTruthJson(scene, frame);
+  s.result = Pipeline(p).run(xyz(frame.cloud), false);
+  s.eval = eval::evaluate(s.truth, io::reportJson(s.result, "sim"), 0.5, true);
+  return s;
+}
+
 std::string describe(const Scored& s) {
   std::ostringstream os;
   os << "truth:";
@@ -907,26 +927,16 @@ TEST(DoorState, ASheetOfFlyingPixelsAlongTheRaysIsNoWall) {
   };
   for (const Frame f : {Frame{1001, false, 2}, Frame{1001, true, 1}, Frame{1012, false, 3}}) {
     SCOPED_TRACE(::testing::Message() << "seed=" << f.seed << " clutter=" << f.clutter);
-    sim::RandomSceneOptions ro;
-    ro.clutter = f.clutter;
-    const sim::Scene scene = sim::buildScene(sim::randomRoom(f.seed, ro));
-    sim::RgbdOptions o;
-    o.seed = f.seed;
-    o.depth_model = sim::DepthModel::TimeOfFlight;
-    o.robot_camera = true;
-    const sim::SimulatedCloud frame = sim::captureRgbd(scene, o);
-    Parameters p;
-    p.up_axis = "-y";
-    const PipelineResult r = Pipeline(p).run(xyz(frame.cloud), false);
-    const nlohmann::json truth = sim::groundTruthJson(scene, frame);
-    const eval::EvalResult e = eval::evaluate(truth, io::reportJson(r, "sim"), 0.5, true);
+    const Scored s = runRobotFrame(f.seed, sim::DepthModel::TimeOfFlight, f.clutter);
+    const PipelineResult& r = s.result;
+    const eval::EvalResult& e = s.eval;
     // No wall is seen edge-on from the camera all along it.
     for (const WallResult& w : r.walls) {
       const Eigen::Vector3d a = w.line_point, d = w.line_direction.normalized();
       const Eigen::Vector3d n = d.cross(r.up).normalized();
       double nearest = 1e9;
       for (const Eigen::Vector3d& c : w.corners) nearest = std::min(nearest, (c - c.dot(r.up) * r.up).norm());
-      EXPECT_GT(std::abs(a.dot(n)), 0.087 * nearest) << "wall " << w.id << " passes by the camera\n" << [&] { std::string t; for (const auto& l : r.trace) t += l + "\n"; return t; }();
+      EXPECT_GT(std::abs(a.dot(n)), 0.087 * nearest) << "wall " << w.id << " passes by the camera" << trace(s);
     }
     EXPECT_EQ(e.matched, 1);
     EXPECT_LE(e.reported_doors, f.max_reported);
@@ -949,22 +959,10 @@ TEST(DoorState, AWallJoinedFromScatteredPiecesIsNoWall) {
   for (const Frame f : {Frame{1012, sim::DepthModel::StructuredLight, false},
                         Frame{1010, sim::DepthModel::StructuredLight, true}}) {
     SCOPED_TRACE(::testing::Message() << "seed=" << f.seed << " model=" << sim::toString(f.model) << " clutter=" << f.clutter);
-    sim::RandomSceneOptions ro;
-    ro.clutter = f.clutter;
-    const sim::Scene scene = sim::buildScene(sim::randomRoom(f.seed, ro));
-    sim::RgbdOptions o;
-    o.seed = f.seed;
-    o.depth_model = f.model;
-    o.robot_camera = true;
-    const sim::SimulatedCloud frame = sim::captureRgbd(scene, o);
-    Parameters p;
-    p.up_axis = "-y";
-    const PipelineResult r = Pipeline(p).run(xyz(frame.cloud), false);
-    const eval::EvalResult e = eval::evaluate(sim::groundTruthJson(scene, frame), io::reportJson(r, "sim"), 0.5, true);
-    std::string trace;
-    for (const auto& l : r.trace) trace += l + "\n";
-    EXPECT_EQ(e.matched, 1) << trace;
-    EXPECT_EQ(e.reported_doors, 1) << trace;
+    const Scored s = runRobotFrame(f.seed, f.model, f.clutter);
+    const eval::EvalResult& e = s.eval;
+    EXPECT_EQ(e.matched, 1) << trace(s);
+    EXPECT_EQ(e.reported_doors, 1) << trace(s);
   }
 }
 
