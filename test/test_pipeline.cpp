@@ -40,6 +40,15 @@ struct Scored {
   nlohmann::json truth;
 };
 
+// The pipeline on a simulated cloud, scored against its truth (doors in view).
+Scored runAndScore(const sim::Scene& scene, const sim::SimulatedCloud& cloud, const Parameters& p) {
+  Scored s;
+  s.truth = sim::groundTruthJson(scene, cloud);
+  s.result = Pipeline(p).run(xyz(cloud.cloud), false);
+  s.eval = eval::evaluate(s.truth, io::reportJson(s.result, "sim"), 0.5, true);
+  return s;
+}
+
 Scored runScene(const sim::RoomSpec& spec, std::uint64_t seed, const std::string& sensor, std::size_t points = 400000) {
   const sim::Scene scene = sim::buildScene(spec);
   sim::SimulatedCloud cloud;
@@ -55,11 +64,7 @@ Scored runScene(const sim::RoomSpec& spec, std::uint64_t seed, const std::string
     cloud = sim::captureRgbd(scene, o);
     p.up_axis = "-y";
   }
-  Scored s;
-  s.truth = sim::groundTruthJson(scene, cloud);
-  s.result = Pipeline(p).run(xyz(cloud.cloud), false);
-  s.eval = eval::evaluate(s.truth, io::reportJson(s.result, "sim"), 0.5, true);
-  return s;
+  return runAndScore(scene, cloud, p);
 }
 
 // A robot camera's frame (door_scene_sim --sensor rgbd --robot-camera
@@ -72,14 +77,9 @@ Scored runRobotFrame(std::uint64_t seed, sim::DepthModel model, bool clutter) {
   o.seed = seed;
   o.depth_model = model;
   o.robot_camera = true;
-  const sim::SimulatedCloud frame = sim::captureRgbd(scene, o);
   Parameters p;
   p.up_axis = "-y";
-  Scored s;
-  s.truth = sim::groundTruthJson(scene, frame);
-  s.result = Pipeline(p).run(xyz(frame.cloud), false);
-  s.eval = eval::evaluate(s.truth, io::reportJson(s.result, "sim"), 0.5, true);
-  return s;
+  return runAndScore(scene, sim::captureRgbd(scene, o), p);
 }
 
 std::string describe(const Scored& s) {
