@@ -1,0 +1,70 @@
+// Segmentation: the floor and the ceiling from the height histogram of
+// horizontal-surface points (findFloorCeiling).
+#include "door_state_recognition/segmentation/segmentation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <vector>
+
+namespace dsr {
+namespace segmentation {
+
+// Vertical structure this far above a horizontal level (m), in more than
+// 2% of the vertical points (and at least this many), says the level is
+// not the ceiling.
+constexpr double kAboveCeiling = 0.3;
+constexpr std::size_t kAboveCeilingPoints = 50;
+
+FloorCeiling findFloorCeiling(const Points& points, const Normals& normals, const Parameters& p, double viewpoint_z) {
+  FloorCeiling fc;
+  std::vector<float> z;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (std::abs(normals.n[i].z()) > p.horizontal_normal_z) z.push_back(points[i].z());
+  if (z.size() < 50) return fc;
+  const auto [mn, mx] = std::minmax_element(z.begin(), z.end());
+  const double z0 = *mn, bin = std::max(p.histogram_bin, (*mx - z0) / 100000.0);
+  const std::size_t bins = static_cast<std::size_t>((*mx - z0) / bin) + 1;
+  std::vector<int> hist(bins, 0);
+  for (float v : z) ++hist[std::min(bins - 1, static_cast<std::size_t>((v - z0) / bin))];
+  const int peak = *std::max_element(hist.begin(), hist.end());
+  const int threshold = std::max(30, peak / 8);
+  // Significant local maxima, low to high.
+  std::vector<std::size_t> peaks;
+  for (std::size_t b = 0; b < bins; ++b) {
+    const int left = b > 0 ? hist[b - 1] : 0, right = b + 1 < bins ? hist[b + 1] : 0;
+    if (hist[b] >= threshold && hist[b] >= left && hist[b] >= right) peaks.push_back(b);
+  }
+  if (peaks.empty()) return fc;
+  auto refine = [&](std::size_t b) {  // mean z of the points in the peak's neighbourhood
+    double s = 0;
+    int n = 0;
+    for (float v : z)
+      if (std::abs(v - (z0 + (b + 0.5) * bin)) <= 1.5 * bin) s += v, ++n;
+    return n ? s / n : z0 + (b + 0.5) * bin;
+  };
+  const double lo = refine(peaks.front()), hi = refine(peaks.back());
+  // A ceiling closes the room: walls do not rise above it. A horizontal
+  // level with much vertical structure above it is the top of a desk or a
+  // cupboard, or the underside of a shelf, seen by a sensor that does not
+  // see the ceiling (a camera frame rarely does).
+  std::size_t vertical = 0, above = 0;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (std::abs(normals.n[i].z()) < p.vertical_normal_z) {
+      ++vertical;
+      above += points[i].z() > hi + kAboveCeiling;
+    }
+  const bool closes = above < std::max<std::size_t>(kAboveCeilingPoints, vertical / 50);
+  if (hi - lo >= p.min_room_height && closes) {
+    fc.floor = lo;
+    fc.ceiling = hi;
+  } else if (lo < viewpoint_z) {
+    fc.floor = lo;  // one horizontal level below the sensor: the floor
+  } else if (closes) {
+    fc.ceiling = hi;
+  }
+  return fc;
+}
+
+}  // namespace segmentation
+}  // namespace dsr

@@ -1,0 +1,384 @@
+// Segmentation: walls as vertical planes by iterative 1-point RANSAC,
+// refined by total least squares (findWalls); each plane's segments go
+// through the wall rules (wall_acceptance.cpp).
+#include "door_state_recognition/segmentation/segmentation.hpp"
+
+#include "door_state_recognition/util/first_error.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <exception>
+#include <memory>
+#include <random>
+#include <vector>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#include <immintrin.h>
+#endif
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace dsr {
+namespace segmentation {
+
+namespace {
+
+// Total least squares line of 2-D points: centroid and unit direction.
+void fitLine(const std::vector<Eigen::Vector2d>& pts, Eigen::Vector2d& c, Eigen::Vector2d& dir) {
+  c.setZero();
+  for (const auto& q : pts) c += q;
+  c /= static_cast<double>(pts.size());
+  Eigen::Matrix2d C = Eigen::Matrix2d::Zero();
+  for (const auto& q : pts) C += (q - c) * (q - c).transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(C);
+  dir = es.eigenvectors().col(1);
+}
+
+}  // namespace
+
+namespace {
+
+// RANSAC never stops before this many draws.
+constexpr int kMinRansacIterations = 20;
+// Below these (sample points scored, a plane's inliers) the work of a RANSAC
+// round is too small to hand to the other thread: waiting for it could cost
+// more (a thread of a loaded machine waits for its turn on a core).
+constexpr std::size_t kTaskSample = 4000, kTaskInliers = 1000;
+// A pool of this many points or more has its inliers found in two halves at once.
+constexpr std::size_t kTaskPool = 20000;
+
+// Of the n sample points (x, y, normal nx_i, ny_i), those within wd of the
+// line through (qx, qy) with normal (nx, ny) whose normal agrees (|n . n_i|
+// > agree), without branches.
+std::size_t countInliersScalar(const float* x, const float* y, const float* nxs, const float* nys, std::size_t n,
+                               double qx, double qy, double nx, double ny, double wd, double agree) {
+  std::size_t count = 0, j = 0;
+#if defined(__SSE2__)
+  {  // two at a time: the same double operations, in the same order
+    const __m128d vqx = _mm_set1_pd(qx), vqy = _mm_set1_pd(qy), vnx = _mm_set1_pd(nx), vny = _mm_set1_pd(ny);
+    const __m128d vwd = _mm_set1_pd(wd), vag = _mm_set1_pd(agree);
+    const __m128d abs_mask = _mm_castsi128_pd(_mm_set1_epi64x(0x7fffffffffffffffLL));
+    auto load2 = [](const float* f) { return _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(f)))); };
+    for (; j + 2 <= n; j += 2) {
+      const __m128d dist = _mm_add_pd(_mm_mul_pd(_mm_sub_pd(load2(&x[j]), vqx), vnx),
+                                      _mm_mul_pd(_mm_sub_pd(load2(&y[j]), vqy), vny));
+      const __m128d dot = _mm_add_pd(_mm_mul_pd(vnx, load2(&nxs[j])), _mm_mul_pd(vny, load2(&nys[j])));
+      const __m128d in = _mm_and_pd(_mm_cmplt_pd(_mm_and_pd(dist, abs_mask), vwd),
+                                    _mm_cmpgt_pd(_mm_and_pd(dot, abs_mask), vag));
+      const int bits = _mm_movemask_pd(in);
+      count += static_cast<std::size_t>((bits & 1) + (bits >> 1));
+    }
+  }
+#endif
+  for (; j < n; ++j) {
+    const double dist = (static_cast<double>(x[j]) - qx) * nx + (static_cast<double>(y[j]) - qy) * ny;
+    const double dot = nx * static_cast<double>(nxs[j]) + ny * static_cast<double>(nys[j]);
+    count += static_cast<std::size_t>((std::abs(dist) < wd) & (std::abs(dot) > agree));
+  }
+  return count;
+}
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define DSR_COUNT_INLIERS_AVX2 1
+// countInliersScalar four at a time on a CPU with AVX2: the same double
+// operations in each lane (AVX2 alone, no FMA: no multiply-add is fused),
+// the same count. The rest as countInliersScalar counts it.
+// The inlier test of countInliersScalar on points [j, j + 4), for every
+// whole block of four of the n: on(j, bits), bit k set when point j + k is
+// an inlier. Returns where the blocks end (the rest is the scalar code's).
+template <class F>
+__attribute__((target("avx2"))) inline std::size_t inlierBlocksAvx2(const float* x, const float* y, const float* nxs,
+                                                                    const float* nys, std::size_t n, double qx,
+                                                                    double qy, double nx, double ny, double wd,
+                                                                    double agree, const F& on) {
+  std::size_t j = 0;
+  const __m256d vqx = _mm256_set1_pd(qx), vqy = _mm256_set1_pd(qy), vnx = _mm256_set1_pd(nx), vny = _mm256_set1_pd(ny);
+  const __m256d vwd = _mm256_set1_pd(wd), vag = _mm256_set1_pd(agree);
+  const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL));
+  for (; j + 4 <= n; j += 4) {
+    const __m256d px = _mm256_cvtps_pd(_mm_loadu_ps(&x[j])), py = _mm256_cvtps_pd(_mm_loadu_ps(&y[j]));
+    const __m256d pnx = _mm256_cvtps_pd(_mm_loadu_ps(&nxs[j])), pny = _mm256_cvtps_pd(_mm_loadu_ps(&nys[j]));
+    const __m256d dist = _mm256_add_pd(_mm256_mul_pd(_mm256_sub_pd(px, vqx), vnx), _mm256_mul_pd(_mm256_sub_pd(py, vqy), vny));
+    const __m256d dot = _mm256_add_pd(_mm256_mul_pd(vnx, pnx), _mm256_mul_pd(vny, pny));
+    const __m256d in = _mm256_and_pd(_mm256_cmp_pd(_mm256_and_pd(dist, abs_mask), vwd, _CMP_LT_OQ),
+                                     _mm256_cmp_pd(_mm256_and_pd(dot, abs_mask), vag, _CMP_GT_OQ));
+    on(j, static_cast<unsigned>(_mm256_movemask_pd(in)));
+  }
+  // Upper halves of the vector registers cleared before returning to SSE
+  // code: left dirty, every SSE instruction after would wait on them.
+  _mm256_zeroupper();
+  return j;
+}
+
+__attribute__((target("avx2"))) std::size_t countInliersAvx2(const float* x, const float* y, const float* nxs,
+                                                              const float* nys, std::size_t n, double qx, double qy,
+                                                              double nx, double ny, double wd, double agree) {
+  std::size_t count = 0;
+  const std::size_t j = inlierBlocksAvx2(x, y, nxs, nys, n, qx, qy, nx, ny, wd, agree, [&](std::size_t, unsigned bits) {
+    count += static_cast<std::size_t>(__builtin_popcount(bits));
+  });
+  return count + countInliersScalar(x + j, y + j, nxs + j, nys + j, n - j, qx, qy, nx, ny, wd, agree);
+}
+#endif
+
+// Of the n pool points (x, y, normal nx_i, ny_i; pool indices idx), those
+// countInliersScalar counts, appended in order: index to in, (x, y) in
+// double to q.
+void collectInliersScalar(const float* x, const float* y, const float* nxs, const float* nys, const int* idx,
+                          std::size_t n, double qx, double qy, double nx, double ny, double wd, double agree,
+                          std::vector<int>& in, std::vector<Eigen::Vector2d>& q) {
+  for (std::size_t j = 0; j < n; ++j) {
+    const double rx = x[j], ry = y[j];
+    const double dist = (rx - qx) * nx + (ry - qy) * ny;
+    const double dot = nx * static_cast<double>(nxs[j]) + ny * static_cast<double>(nys[j]);
+    if (std::abs(dist) < wd && std::abs(dot) > agree) {
+      in.push_back(idx[j]);
+      q.emplace_back(rx, ry);
+    }
+  }
+}
+
+#ifdef DSR_COUNT_INLIERS_AVX2
+// collectInliersScalar four at a time with AVX2 (no FMA): the same double
+// operations in each lane, the same inliers in the same order.
+__attribute__((target("avx2"))) void collectInliersAvx2(const float* x, const float* y, const float* nxs,
+                                                         const float* nys, const int* idx, std::size_t n, double qx,
+                                                         double qy, double nx, double ny, double wd, double agree,
+                                                         std::vector<int>& in, std::vector<Eigen::Vector2d>& q) {
+  const std::size_t j = inlierBlocksAvx2(x, y, nxs, nys, n, qx, qy, nx, ny, wd, agree, [&](std::size_t b, unsigned bits) {
+    while (bits) {
+      const int k = __builtin_ctz(bits);
+      bits &= bits - 1;
+      in.push_back(idx[b + k]);
+      q.emplace_back(static_cast<double>(x[b + k]), static_cast<double>(y[b + k]));
+    }
+  });
+  collectInliersScalar(x + j, y + j, nxs + j, nys + j, idx + j, n - j, qx, qy, nx, ny, wd, agree, in, q);
+}
+#endif
+
+void collectInliers(const float* x, const float* y, const float* nxs, const float* nys, const int* idx, std::size_t n,
+                    double qx, double qy, double nx, double ny, double wd, double agree, std::vector<int>& in,
+                    std::vector<Eigen::Vector2d>& q) {
+#ifdef DSR_COUNT_INLIERS_AVX2
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  if (avx2) return collectInliersAvx2(x, y, nxs, nys, idx, n, qx, qy, nx, ny, wd, agree, in, q);
+#endif
+  collectInliersScalar(x, y, nxs, nys, idx, n, qx, qy, nx, ny, wd, agree, in, q);
+}
+
+std::size_t countInliers(const float* x, const float* y, const float* nxs, const float* nys, std::size_t n, double qx,
+                         double qy, double nx, double ny, double wd, double agree) {
+#ifdef DSR_COUNT_INLIERS_AVX2
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  if (avx2) return countInliersAvx2(x, y, nxs, nys, n, qx, qy, nx, ny, wd, agree);
+#endif
+  return countInliersScalar(x, y, nxs, nys, n, qx, qy, nx, ny, wd, agree);
+}
+
+}  // namespace
+
+std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, double floor_z, double height_top,
+                                 bool ceiling_known, const Eigen::Vector2d& viewpoint, const Parameters& p,
+                                 const ViewTop* view, const OnWall& on_wall) {
+  std::vector<int> pool;
+  pool.reserve(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (std::abs(normals.n[i].z()) < p.vertical_normal_z && points[i].z() > floor_z + 0.05) pool.push_back(static_cast<int>(i));
+  // The pool's x, y and normal x, y side by side (kept in the pool's order
+  // as it shrinks): the sample and the inlier passes read them in turn
+  // instead of gathering them.
+  std::vector<float> px(pool.size()), py(pool.size()), pnx(pool.size()), pny(pool.size());
+  for (std::size_t j = 0; j < pool.size(); ++j) {
+    const int i = pool[j];
+    px[j] = points[i].x(), py[j] = points[i].y();
+    pnx[j] = normals.n[i].x(), pny[j] = normals.n[i].y();
+  }
+  std::vector<WallPlane> walls;
+  std::mt19937 rng(static_cast<unsigned>(p.random_seed));
+  std::vector<float> sx, sy, snx, sny;  // the scored sample, side by side
+  // A round's wall rules (addWallSegments) run as a task on the other core
+  // while this one draws the next rounds' planes, which need only the pool
+  // and the generator, not the walls. The rules of consecutive rounds still
+  // run in turn (task dependences: the shadow test reads the walls before),
+  // and a round is kept only if the walls found before it leave room
+  // (max_walls), as in a loop that waited for them: rounds drawn past the
+  // last are dropped unused.
+  util::FirstError error;
+  int threads = 1;
+#ifdef _OPENMP
+  threads = std::min(2, omp_get_max_threads());
+#endif
+  // The rounds drawn on the master thread (the other takes the tasks at the
+  // region's end): libgomp keeps the dependences of the tasks a thread makes
+  // in that thread's implicit task, and a pool thread's (where a single
+  // construct may put the rounds) can be set up afresh for the next region
+  // before it is freed (LeakSanitizer saw it leak); the master's is freed as
+  // its region ends.
+#pragma omp parallel num_threads(threads) if (threads > 1)
+#pragma omp master
+  try {
+    for (int round = 0; round < 4 * p.max_walls; ++round) {
+      if (static_cast<int>(pool.size()) < p.min_wall_points) break;
+      // 1-point RANSAC: a point with its (horizontal) normal proposes a plane.
+      std::uniform_int_distribution<std::size_t> pick(0, pool.size() - 1);
+      std::size_t best_count = 0;
+      Eigen::Vector2d best_pt, best_n;
+      const std::size_t stride = std::max<std::size_t>(1, pool.size() / 20000);
+      const double sampled = static_cast<double>((pool.size() + stride - 1) / stride);
+      // Adaptive: stop once a plane larger than the best would have been drawn
+      // with probability 0.999 (capped by ransac_iterations).
+      int needed = p.ransac_iterations;
+      // The scored sample (every stride-th point of the pool) in arrays of
+      // x, y and the normal's x, y, read in turn instead of gathered.
+      // Every point of the pool (stride 1): the pool's own arrays.
+      const float *sxp = px.data(), *syp = py.data(), *snxp = pnx.data(), *snyp = pny.data();
+      if (stride > 1) {
+        sx.clear(), sy.clear(), snx.clear(), sny.clear();
+        for (std::size_t j = 0; j < pool.size(); j += stride) {
+          sx.push_back(px[j]), sy.push_back(py[j]);
+          snx.push_back(pnx[j]), sny.push_back(pny[j]);
+        }
+        sxp = sx.data(), syp = sy.data(), snxp = snx.data(), snyp = sny.data();
+      }
+      const std::size_t ns = (pool.size() + stride - 1) / stride;
+      const double wd = p.wall_distance, agree = p.wall_normal_agreement;
+      // The plane of pool point s scored on the sample (0 if s has no normal).
+      auto score = [&](int s) -> std::size_t {
+        Eigen::Vector2d n(normals.n[s].x(), normals.n[s].y());
+        if (n.norm() < 0.5) return 0;
+        n.normalize();
+        return countInliers(sxp, syp, snxp, snyp, ns, points[s].x(), points[s].y(), n.x(), n.y(), wd, agree);
+      };
+      // The first kMinRansacIterations draws are scored whatever they score
+      // (needed never falls below): drawn in turn as the loop draws them, and
+      // scored as tasks, two at once (a small sample here: no tasks, no wait
+      // on the other thread).
+      const int always = std::min(kMinRansacIterations, p.ransac_iterations);
+      std::vector<int> drawn(always);
+      std::vector<std::size_t> counts(always, 0);
+      for (int it = 0; it < always; ++it) drawn[it] = pool[pick(rng)];
+#pragma omp taskloop default(shared) num_tasks(2) if (ns >= kTaskSample)
+      for (int it = 0; it < always; ++it) counts[it] = score(drawn[it]);
+      for (int it = 0; it < std::min(needed, p.ransac_iterations); ++it) {
+        const int s = it < always ? drawn[it] : pool[pick(rng)];
+        Eigen::Vector2d n(normals.n[s].x(), normals.n[s].y());
+        if (n.norm() < 0.5) continue;
+        n.normalize();
+        const Eigen::Vector2d q(points[s].x(), points[s].y());
+        const std::size_t count = it < always ? counts[it] : score(s);
+        if (count > best_count) {
+          best_count = count, best_pt = q, best_n = n;
+          const double w = std::min(0.999, best_count / sampled);
+          needed = std::max(kMinRansacIterations, static_cast<int>(std::ceil(std::log(0.001) / std::log(1.0 - w))));
+        }
+      }
+      if (best_count * stride < static_cast<std::size_t>(p.min_wall_points)) break;
+      // Refine twice by TLS on the inliers.
+      std::vector<int> inl;
+      std::vector<Eigen::Vector2d> q2;
+      inl.reserve(pool.size());
+      q2.reserve(pool.size());
+      // The inliers of pool[j0, j1) in pool order.
+      // (Those within wall_distance of the line whose normal agrees: |(r -
+      // best_pt) . best_n| and |best_n . n_i| in double, from the pool's arrays.)
+      auto inliersOf = [&](std::size_t j0, std::size_t j1, std::vector<int>& in, std::vector<Eigen::Vector2d>& q) {
+        collectInliers(px.data() + j0, py.data() + j0, pnx.data() + j0, pny.data() + j0, pool.data() + j0, j1 - j0,
+                       best_pt.x(), best_pt.y(), best_n.x(), best_n.y(), p.wall_distance, p.wall_normal_agreement, in,
+                       q);
+      };
+      // The inliers of the whole pool: a large pool in two halves at once,
+      // the second as a task into lists of its own (moved out when done: the
+      // ends of lists side by side would share cache lines between the
+      // cores), appended after the first's: the lists of one pass. A task
+      // group waits for that task alone, not for the rounds' rules (tasks).
+      std::vector<int> inl_second;
+      std::vector<Eigen::Vector2d> q2_second;
+      auto allInliers = [&] {
+        inl.clear();
+        q2.clear();
+        if (pool.size() < kTaskPool) {
+          inliersOf(0, pool.size(), inl, q2);
+          return;
+        }
+        const std::size_t mid = pool.size() / 2;
+        util::FirstError failed;  // an exception must not leave the task
+#pragma omp taskgroup
+        {
+#pragma omp task default(shared)
+          failed.run([&] {
+            std::vector<int> in;
+            std::vector<Eigen::Vector2d> q;
+            in.reserve(pool.size() - mid);
+            q.reserve(pool.size() - mid);
+            inliersOf(mid, pool.size(), in, q);
+            inl_second.swap(in);
+            q2_second.swap(q);
+          });
+          failed.run([&] { inliersOf(0, mid, inl, q2); });
+        }
+        failed.rethrow();
+        inl.insert(inl.end(), inl_second.begin(), inl_second.end());
+        q2.insert(q2.end(), q2_second.begin(), q2_second.end());
+      };
+      for (int pass = 0; pass < 3; ++pass) {
+        allInliers();
+        if (q2.size() < 3 || pass == 2) break;
+        Eigen::Vector2d c, dir;
+        fitLine(q2, c, dir);
+        best_pt = c;
+        best_n = Eigen::Vector2d(-dir.y(), dir.x());
+      }
+      // Remove the inliers from the pool whatever becomes of them (they are
+      // a part of it, in its order).
+      {
+        std::size_t k = 0, kept = 0;
+        for (std::size_t j = 0; j < pool.size(); ++j) {
+          const int i = pool[j];
+          if (k < inl.size() && inl[k] == i) {
+            ++k;
+            continue;
+          }
+          pool[kept] = i;
+          px[kept] = px[j], py[kept] = py[j], pnx[kept] = pnx[j], pny[kept] = pny[j];
+          ++kept;
+        }
+        pool.resize(kept);
+        px.resize(kept), py.resize(kept), pnx.resize(kept), pny.resize(kept);
+      }
+      const Eigen::Vector2d dir(best_n.y(), -best_n.x());
+      if ((viewpoint - best_pt).dot(best_n) < 0) best_n = -best_n;
+      // The round's rules after the previous round's (depend), each with its
+      // own inliers; skipped once a round failed or max_walls walls are
+      // found, where a loop that waited for them would have stopped.
+      auto round_inl = std::make_shared<std::vector<int>>(std::move(inl));
+      const bool defer = round_inl->size() >= kTaskInliers;
+#pragma omp task default(shared) firstprivate(best_pt, best_n, dir, round_inl) depend(inout : walls) if (defer)
+      error.run([&] {
+        if (!error.failed() && static_cast<int>(walls.size()) < p.max_walls) {
+          const std::size_t before = walls.size();
+          addWallSegments(points, *round_inl, best_pt, dir, best_n, floor_z, height_top, ceiling_known, p, walls, view,
+                          &viewpoint);
+          if (on_wall)
+            for (std::size_t i = before; i < walls.size(); ++i) on_wall(i, walls[i]);
+        }
+      });
+    }
+  } catch (...) {
+    // Kept after the rules of the rounds drawn before it, whose exception comes first.
+#pragma omp taskwait
+    error.keep(std::current_exception());
+  }
+  error.rethrow();
+  return walls;
+}
+
+}  // namespace segmentation
+}  // namespace dsr
