@@ -80,7 +80,7 @@ TEST(DriveEval, ADoorSeenInOneCloudOnlyIsNotPublished) {
 // the few points a ring leaves in a 2 cm sub-column stands 8 mm out of the
 // plane somewhere along every wall, and a 64-beam head's rings lie 7 cm
 // apart 6 m off, leaving 5 cm cells between them empty. Trim is told only
-// where it stands out of the wall's own noise (recognition.cpp, kLegZ) and an
+// where it stands out of the wall's own noise (doorway_trim.cpp, kLegZ) and an
 // empty cell between rings is not seen through (ViewTop::ray_spacing): before
 // either, these drives kept closed doors on plain walls (1011: three, 1000:
 // one, each confirmed by 2-5 clouds).

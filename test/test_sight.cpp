@@ -187,7 +187,7 @@ TEST(Sight, WithoutAViewpointBookcasesBesideDoorsAreNoDoors) {
   // stand 15-40 cm before the wall across its width, where nothing stands
   // before a door (state/doors.cpp, furnishedShare). Before that rule each
   // of these seeds reported one such false door (closed@2, semi_open@8).
-  // Since trim must stand out of the wall's noise (recognition.cpp, kLegZ),
+  // Since trim must stand out of the wall's noise (doorway_trim.cpp, kLegZ),
   // 1007's bookcase makes no candidate at all: the rule is needed on the others.
   const Pipeline pipe{Parameters()};
   sim::RandomSceneOptions room;
