@@ -23,7 +23,7 @@ struct DoorMatch {
 };
 
 // A lower bound may exceed the true angle by the step of its search (2 deg,
-// state/door_state.cpp) without being wrong; beyond that it is a bound error.
+// state/leaf_free_space.cpp) without being wrong; beyond that it is a bound error.
 constexpr double kBoundSlackDeg = 2.0;
 
 struct EvalResult {

@@ -1,0 +1,348 @@
+// State: the scores of leaf hypotheses in fitLeaf's search: support (cells
+// of the leaf holding points) against contradiction (cells rays went
+// through), each point and ray tested only at the angles (and hinges)
+// where its test can pass.
+#include "leaf_internal.hpp"
+
+#include "door_state_recognition/util/floor.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <vector>
+
+namespace dsr {
+namespace state {
+namespace detail {
+
+namespace {
+
+// atan2 in degrees to within 0.001 deg (a minimax polynomial on [0, 1]);
+// the angle index widens every arc by kBearingSlackDeg to stay exact.
+double fastAtan2Deg(double y, double x) {
+  const double ax = std::abs(x), ay = std::abs(y);
+  const double mx = std::max(ax, ay);
+  if (mx == 0) return 0;
+  const double t = std::min(ax, ay) / mx, t2 = t * t;
+  double a = t * (0.9998660 + t2 * (-0.3302995 + t2 * (0.1801410 + t2 * (-0.0851330 + 0.0208351 * t2))));
+  if (ay > ax) a = M_PI / 2 - a;
+  if (x < 0) a = M_PI - a;
+  if (y < 0) a = -a;
+  return a * (180 / M_PI);
+}
+constexpr double kBearingSlackDeg = 0.01;
+// A ray is tested outright at this many angles needed or fewer, its arc not worked out.
+constexpr int kOutrightAngles = 6;
+
+// An upper bound of asin(x), x in [0, 1], within 2% for x <= 0.5: asin's
+// series x + x^3/6 + 3x^5/40 + ... has no coefficient above 1/6 after the
+// first, so it is at most x + x^3 / (6 (1 - x^2)); capped at pi / 2. An arc
+// widened by it holds every angle asin's would (the tests decide).
+inline double asinAbove(double x) {
+  if (x >= 1) return M_PI / 2;
+  return std::min(M_PI / 2, x + x * x * x / (6 * (1 - x * x)));
+}
+
+}  // namespace
+
+// One hypothesis: hinge at (s_h, d_h), closed direction e0 along the wall,
+// swing side m, angle th. Support (cells holding points) against
+// contradiction (cells rays went through), with the best leaf length: the
+// shortest reaching the largest sum of support minus twice contradiction.
+// The angles of one hinge and swing are scored together: a point lies
+// within the leaf's band only for angles near its own bearing from the
+// hinge, and a ray crosses the leaf only for angles within the arc its
+// chord subtends, so each point and ray is tested (exactly, below) only at
+// the angles of its arc, widened by kBearingSlackDeg; the result is the
+// same as testing every point and ray at every angle.
+
+int LeafSearch::bound(const HingeRun& w, int ai) const {  // no length of the leaf at angle ai scores more
+  int total = 0;
+  for (int i = 0; i < na_max; ++i) total += w.sup[static_cast<std::size_t>(ai) * na_max + i];
+  return total;
+}
+
+void LeafSearch::axes(const HingeRun& w, std::vector<Eigen::Vector2d>& E, std::vector<Eigen::Vector2d>& K,
+                      std::vector<Eigen::Vector2d>& P) const {
+  E.resize(w.count);
+  K.resize(w.count);
+  P.resize(w.count);
+  const Eigen::Vector2d H(w.s_h, w.d_h);
+  for (int ai = 0; ai < w.count; ++ai) {
+    const double th = (w.start + ai * w.step) * M_PI / 180;
+    E[ai] = Eigen::Vector2d(std::cos(th) * w.e0, std::sin(th) * w.m);
+    K[ai] = Eigen::Vector2d(std::sin(th) * w.e0, -std::cos(th) * w.m);
+    P[ai] = H + K[ai] * (lt / 2);  // the leaf's mid-plane
+  }
+}
+
+// f(i) for every angle start + i step of w within [lo, hi] degrees, modulo
+// 360, and with i in [first, last] (f is not called outside it).
+template <class F>
+void LeafSearch::forArc(const HingeRun& w, double lo, double hi, F&& f, int first, int last) const {
+  if (last < 0) last = w.count - 1;
+  const double end = w.start + (w.count - 1) * w.step;
+  for (double shift = -360; shift <= 360; shift += 360) {
+    const double a = lo + shift, b = hi + shift;
+    if (b < w.start - w.step || a > end + w.step) continue;  // no angle of the run
+    const int i0 = std::max(first, util::ceilToInt((a - w.start) / w.step - 1e-9));
+    const int i1 = std::min(last, util::floorToInt((b - w.start) / w.step + 1e-9));
+    for (int i = i0; i <= i1; ++i) f(i);
+  }
+}
+
+void LeafSearch::scorePoints(HingeRun& w) const {
+  std::vector<char> seen(w.count * cells, 0);  // per angle: leaf bin x z bin
+  w.sup.assign(static_cast<std::size_t>(w.count) * na_max, 0);
+  std::vector<Eigen::Vector2d> E, K, P;
+  axes(w, E, K, P);
+  for (const Local& q : pts) {
+    const Eigen::Vector2d r(q.s - w.s_h, q.d - w.d_h);
+    const double rho = r.norm();
+    if (rho > r_pts) continue;
+    auto test = [&](int ai) {
+      const double a = r.dot(E[ai]), b = r.dot(K[ai]);
+      if (a < 0.02 || a >= Lmax || b < -tol || b > lt + tol) return;
+      const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
+      char& f = seen[ai * cells + static_cast<std::size_t>(ab) * nz + q.zbin];
+      if (!f) f = 1, ++w.sup[static_cast<std::size_t>(ai) * na_max + ab];
+    };
+    if (rho <= band_hw) {
+      for (int ai = 0; ai < w.count; ++ai) test(ai);
+      continue;
+    }
+    // b = rho sin(th - c) lies in [-tol, lt + tol] only for th - c within
+    // [-asin(tol / rho), asin((lt + tol) / rho)].
+    const double c = fastAtan2Deg(w.m * r.y(), w.e0 * r.x());
+    // A short run of angles (the local search) often lies wholly inside
+    // that arc: x <= asin(x) tells so without asin (testing more angles
+    // than the arc holds is always safe; the test decides).
+    const double end = w.start + (w.count - 1) * w.step, deg = 180 / M_PI;
+    if (c - tol / rho * deg <= w.start && c + band_hw / rho * deg >= end) {
+      for (int ai = 0; ai < w.count; ++ai) test(ai);
+      continue;
+    }
+    const double below = asinAbove(tol / rho) * 180 / M_PI + kBearingSlackDeg;
+    const double above = asinAbove(band_hw / rho) * 180 / M_PI + kBearingSlackDeg;
+    forArc(w, c - below, c + above, test);
+  }
+}
+
+// The cells (per angle: leaf bin x z bin) that rays [r0, r1) go through,
+// marked in blocked; the count of each leaf bin's is its contradiction.
+void LeafSearch::markRays(const HingeRun& w, const std::vector<char>* need, std::size_t r0, std::size_t r1,
+                          std::vector<char>& blocked) const {
+  // The angles needed lie in [first, last]: a test outside would return at once.
+  int first = 0, last = w.count - 1;
+  if (need) {
+    while (first <= last && !(*need)[first]) ++first;
+    while (last >= first && !(*need)[last]) --last;
+    if (first > last) return;
+  }
+  std::vector<Eigen::Vector2d> E, K, P;
+  axes(w, E, K, P);
+  const Eigen::Vector2d H(w.s_h, w.d_h);
+  // With few angles needed a ray on the chord is tested at each of them
+  // outright: cheaper than working out its arc (the test decides either way).
+  int needed = 0;
+  for (int ai = first; ai <= last; ++ai) needed += !need || (*need)[ai];
+  const bool outright = needed <= kOutrightAngles;
+  for (std::size_t ri = r0; ri < r1; ++ri) {
+    const Ray& ray = rays[ri];
+    // The part of the ray that counts: from the sensor to 6 cm before its point.
+    const Eigen::Vector2d A = vsd, B = ray.q - (0.06 / ray.len) * (ray.q - vsd);
+    const Eigen::Vector2d u = B - A, w0 = A - H;
+    const double uu = u.squaredNorm();
+    if (uu < 1e-12) continue;
+    // Chord within the disc the leaf's mid-line can reach.
+    const double bq = w0.dot(u), cq = w0.squaredNorm() - r_rays * r_rays, disc = bq * bq - uu * cq;
+    if (disc <= 0) continue;
+    const double sq = std::sqrt(disc);
+    const double t0 = std::max(0.0, (-bq - sq) / uu), t1 = std::min(1.0, (-bq + sq) / uu);
+    if (t0 >= t1) continue;
+    // Every crossing with a leaf lies on that chord: a ray passing above or
+    // below the leaf's heights there crosses none (1 mm spares rounding).
+    const double lam_max = 1 - 0.06 / ray.len, dz = ray.qz - vsz;
+    const double za = vsz + t0 * lam_max * dz, zb = vsz + t1 * lam_max * dz;
+    if (std::max(za, zb) < z0 - 1e-3 || std::min(za, zb) >= z1 + 1e-3) continue;
+    const Eigen::Vector2d r = ray.q - vsd;
+    auto test = [&](int ai) {
+      if (need && !(*need)[ai]) return;
+      double a, z;
+      if (!crossLeaf(vsd, r, vsz, dz, lam_max, P[ai], E[ai], a, z) || a < 0.05 || a >= Lmax || z < z0 || z >= z1)
+        return;
+      const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
+      blocked[ai * cells + static_cast<std::size_t>(ab) * nz + std::min(nz - 1, static_cast<int>((z - z0) / zbin))] = 1;
+    };
+    if (outright) {
+      for (int ai = first; ai <= last; ++ai) test(ai);
+      continue;
+    }
+    const double tc = std::clamp(-bq / uu, t0, t1);
+    const double rho_min = (w0 + tc * u).norm();
+    if (rho_min <= std::max(0.05, lt / 2)) {
+      for (int ai = first; ai <= last; ++ai) test(ai);
+      continue;
+    }
+    const double c0 = fastAtan2Deg(w.m * (w0 + t0 * u).y(), w.e0 * (w0 + t0 * u).x());
+    const double c1 = fastAtan2Deg(w.m * (w0 + t1 * u).y(), w.e0 * (w0 + t1 * u).x());
+    // remainder(c1 - c0, 360) for |c1 - c0| <= 360 (exact, as remainder is).
+    const double diff = c1 - c0;
+    const double span = diff > 180 ? diff - 360 : diff < -180 ? diff + 360 : diff;
+    const double lo = c0 + std::min(0.0, span), hi = lo + std::abs(span);
+    // The leaf's mid-line passes a point X of the chord (bearing c, distance
+    // rho) at th = c + asin(lt / 2 / rho): the arc widens on one side only.
+    const double dl = asinAbove(std::min(1.0, lt / 2 / rho_min)) * 180 / M_PI + kBearingSlackDeg;
+    forArc(w, lo - kBearingSlackDeg, hi + dl, test, first, last);
+  }
+}
+
+// Each leaf bin's contradiction at the angles needed (0 at the others, never read).
+void LeafSearch::tallyRays(HingeRun& w, const std::vector<char>* need, const std::vector<char>& blocked) const {
+  w.con.assign(static_cast<std::size_t>(w.count) * na_max, 0);
+  for (int ai = 0; ai < w.count; ++ai)
+    for (int ab = 0; ab < na_max && (!need || (*need)[ai]); ++ab) {
+      const char* b = &blocked[ai * cells + static_cast<std::size_t>(ab) * nz];
+      int n = 0;
+      for (int zb = 0; zb < nz; ++zb) n += b[zb];
+      w.con[static_cast<std::size_t>(ai) * na_max + ab] = n;
+    }
+}
+
+void LeafSearch::scoreRays(HingeRun& w, const std::vector<char>* need) const {
+  std::vector<char> blocked(w.count * cells, 0);
+  markRays(w, need, 0, rays.size(), blocked);
+  tallyRays(w, need, blocked);
+}
+
+void LeafSearch::finishScores(HingeRun& w, const std::vector<char>* need) const {
+  w.scores.assign(w.count, Score());
+  for (int ai = 0; ai < w.count; ++ai) {
+    Score& out = w.scores[ai];
+    if (need && !(*need)[ai]) {
+      out.score = -std::numeric_limits<double>::infinity();
+      continue;
+    }
+    int acc = 0, cells_seen = 0, contra = 0;
+    for (int i = 0; i < na_max; ++i) {
+      const std::size_t j = static_cast<std::size_t>(ai) * na_max + i;
+      acc += w.sup[j] - 2 * w.con[j];
+      cells_seen += w.sup[j];
+      contra += w.con[j];
+      if (i + 1 >= na_min && acc > out.score) out = {static_cast<double>(acc), cells_seen, contra, i + 1};
+    }
+  }
+}
+
+// The hinges of the local search all at once: the same angles at hinges
+// 2 cm apart along the wall (w[i].s_h = s_center + (i - reach) 0.02, one
+// d_h). For one point or ray and one angle, the tests below are linear in
+// the hinge's position along the wall: each passes only on an interval of
+// it, so each point and ray is tested (exactly, as scorePoints and
+// scoreRays test it) only at the hinges of that interval, widened by
+// kShiftSlack; the result is the same as testing it at every hinge. The
+// angles are the tasks (over the cores).
+// Points (support) when need is null; else rays (contradiction) at the
+// hinges and angles where (*need)[hinge][angle].
+void LeafSearch::scoreShifts(std::vector<HingeRun>& ws, int reach, double s_center,
+                             const std::vector<std::vector<char>>* need) const {
+  const int ns = static_cast<int>(ws.size()), count = ws.front().count;
+  const double d_h = ws.front().d_h;
+  std::vector<std::vector<Eigen::Vector2d>> E(ns), K(ns), P(ns);
+  for (int i = 0; i < ns; ++i) {
+    axes(ws[i], E[i], K[i], P[i]);
+    (need ? ws[i].con : ws[i].sup).assign(static_cast<std::size_t>(count) * na_max, 0);
+  }
+  // Rounding moves the ends of an interval by far less than a micrometre
+  // (coefficients below kTiny are not used, and rays within 1e-3 of
+  // parallel to the leaf are tested at every hinge): widened by a whole
+  // hinge step, an interval holds every hinge a test could pass at.
+  constexpr double kShiftSlack = 0.02, kTiny = 1e-3;
+  // Hinges i whose s_h lies within [lo, hi], as [i0, i1] (empty: i0 > i1).
+  auto hingeRange = [&](double lo, double hi, int& i0, int& i1) {
+    const double f0 = std::max(-1.0, (lo - s_center) / 0.02 + reach), f1 = std::min(static_cast<double>(ns), (hi - s_center) / 0.02 + reach);
+    i0 = std::max(0, static_cast<int>(std::ceil(f0)));
+    i1 = std::min(ns - 1, static_cast<int>(std::floor(f1)));
+  };
+  // x with c0 + c1 x in [lo, hi], widened by kShiftSlack, intersected into
+  // [xlo, xhi] (no bound when c1 is too small to tell).
+  auto clip = [&](double c0, double c1, double lo, double hi, double& xlo, double& xhi) {
+    if (std::abs(c1) < kTiny) return;
+    double a = (lo - c0) / c1, b = (hi - c0) / c1;
+    if (a > b) std::swap(a, b);
+    xlo = std::max(xlo, a - kShiftSlack);
+    xhi = std::min(xhi, b + kShiftSlack);
+  };
+  const double inf = std::numeric_limits<double>::infinity();
+  forEachTask(static_cast<std::size_t>(count), [&](std::size_t task) {
+    const int ai = static_cast<int>(task);
+    std::vector<char> seen(static_cast<std::size_t>(ns) * cells, 0), blocked(static_cast<std::size_t>(ns) * cells, 0);
+    const Eigen::Vector2d Ea = E[0][ai], Ka = K[0][ai];
+    if (!need) {
+      for (const Local& q : pts) {
+        // r = (q.s - s_h, q.d - d_h): a = r.E and b = r.K are linear in x = q.s - s_h.
+        const double dy = q.d - d_h;
+        double xlo = -inf, xhi = inf;
+        clip(dy * Ea.y(), Ea.x(), 0.02, Lmax, xlo, xhi);
+        clip(dy * Ka.y(), Ka.x(), -tol, lt + tol, xlo, xhi);
+        if (xlo > xhi) continue;
+        int i0, i1;
+        hingeRange(q.s - xhi, q.s - xlo, i0, i1);
+        for (int i = i0; i <= i1; ++i) {
+          const HingeRun& w = ws[i];
+          const Eigen::Vector2d r(q.s - w.s_h, q.d - w.d_h);
+          const double a = r.dot(E[i][ai]), b = r.dot(K[i][ai]);
+          if (a < 0.02 || a >= Lmax || b < -tol || b > lt + tol) continue;
+          const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
+          char& f = seen[static_cast<std::size_t>(i) * cells + static_cast<std::size_t>(ab) * nz + q.zbin];
+          if (!f) f = 1, ++ws[i].sup[static_cast<std::size_t>(ai) * na_max + ab];
+        }
+      }
+      return;
+    }
+    bool any = false;
+    for (int i = 0; i < ns; ++i) any |= (*need)[i][ai] != 0;
+    if (!any) return;
+    for (const Ray& ray : rays) {
+      const Eigen::Vector2d r = ray.q - vsd;
+      const double denom = r.x() * Ea.y() - r.y() * Ea.x();
+      if (std::abs(denom) < 1e-9) continue;  // crossLeaf: parallel, crosses at no hinge
+      const double lam_max = 1 - 0.06 / ray.len, dz = ray.qz - vsz;
+      // w = P - v: w.y the same at every hinge, w.x = s_h + (K.x lt / 2 - v.x) =: s_h + off.
+      const double wy = P[0][ai].y() - vsd.y(), off = Ka.x() * (lt / 2) - vsd.x();
+      // lam = (w.x E.y - w.y E.x) / denom in (0, lam_max], and z = vz + lam dz in [z0, z1).
+      double llo = 0, lhi = lam_max;
+      if (std::abs(dz) >= kTiny) {
+        double za = (z0 - vsz) / dz, zb = (z1 - vsz) / dz;
+        if (za > zb) std::swap(za, zb);
+        llo = std::max(llo, za), lhi = std::min(lhi, zb);
+      }
+      if (llo > lhi + 1e-9) continue;
+      double xlo = -inf, xhi = inf;  // x = w.x
+      if (std::abs(denom) >= kTiny) {
+        clip(-wy * Ea.x() / denom, Ea.y() / denom, llo, lhi, xlo, xhi);
+        // a = (w.x r.y - w.y r.x) / denom in [0.05, Lmax).
+        clip(-wy * r.x() / denom, r.y() / denom, 0.05, Lmax, xlo, xhi);
+        if (xlo > xhi) continue;
+      }
+      int i0, i1;
+      hingeRange(xlo - off, xhi - off, i0, i1);
+      for (int i = i0; i <= i1; ++i) {
+        if (!(*need)[i][ai]) continue;
+        double a, z;
+        if (!crossLeaf(vsd, r, vsz, dz, lam_max, P[i][ai], E[i][ai], a, z) || a < 0.05 || a >= Lmax || z < z0 ||
+            z >= z1)
+          continue;
+        const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
+        char& f = blocked[static_cast<std::size_t>(i) * cells + static_cast<std::size_t>(ab) * nz +
+                          std::min(nz - 1, static_cast<int>((z - z0) / zbin))];
+        if (!f) f = 1, ++ws[i].con[static_cast<std::size_t>(ai) * na_max + ab];
+      }
+    }
+  });
+}
+
+}  // namespace detail
+}  // namespace state
+}  // namespace dsr
