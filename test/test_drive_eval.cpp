@@ -92,3 +92,24 @@ TEST(DriveEval, RangeNoiseAndRingGapsOnPlainWallsMakeNoDoor) {
       if (d.passed) EXPECT_TRUE(d.right) << "seed " << seed << " door " << d.door << ": " << d.why;
   }
 }
+
+// DriveTracker's withdrawal (drive_tracker.hpp): on drive 1012 the first
+// three clouds show two open "doors" that are not there, and the clouds
+// after look at the same places without finding them. Kept, they end the
+// drive as false doors; withdrawn (the default), none does, and the passed
+// doors stay right under one id.
+TEST(DriveEval, ADoorLaterCloudsLookAtAndDoNotFindIsWithdrawn) {
+  const std::uint64_t seed = 1012;
+  DriveEvalOptions keep;
+  keep.tracker.disprove = false;
+  const DriveEvalResult kept = evaluateDrive(seed, keep);
+  EXPECT_GE(kept.false_doors, 1) << "seed " << seed << ": no false door to withdraw\n" << describe(kept);
+  const DriveEvalResult r = evaluateDrive(seed, DriveEvalOptions());
+  EXPECT_EQ(r.false_doors, 0) << "seed " << seed << "\n" << describe(r);
+  EXPECT_GE(r.disproved, 1) << "seed " << seed;
+  for (const auto& d : r.doors) {
+    if (!d.passed) continue;
+    EXPECT_TRUE(d.right) << "seed " << seed << " door " << d.door << ": " << d.why;
+    EXPECT_EQ(d.ids, 1) << "seed " << seed << " door " << d.door;
+  }
+}

@@ -4,6 +4,7 @@
 // include/door_state_recognition/tracking/door_fusion.hpp it checks.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 #include <stdexcept>
@@ -418,25 +419,63 @@ pcl::PointCloud<pcl::PointXYZ> wallCloud(bool doorway) {
 
 }  // namespace
 
-TEST(DriveTracker, ADoorwayLaterSweepsMeasureAsPlainWallIsDroppedAnOpenOneIsKept) {
-  for (const bool doorway : {false, true}) {
-    dsr::DriveTrackerOptions o;
-    o.disprove = true;
-    dsr::DriveTracker t(o);
-    dsr::PipelineResult r;
-    r.doors = {door(Eigen::Vector3d(2, 0, -1), 0.0, false, 0.6, Eigen::Vector3d::UnitY())};
-    const dsr::Parameters p;
-    t.fuse(r, 1.0, p, Eigen::Vector3d::Zero());
-    ASSERT_EQ(t.tracks().size(), 1u);
-    const dsr::Pipeline pipeline{p};
-    std::size_t disproved = 0;
-    for (int k = 0; k < 3; ++k) {
-      pcl::PointCloud<pcl::PointXYZ> c = wallCloud(doorway);
-      const auto step = t.process(pipeline, c, Eigen::Isometry3d::Identity(), 2.0 + k, false);
-      disproved += step.step.disproved;
-      if (!doorway && k < 2) EXPECT_EQ(t.tracks().size(), 1u) << "dropped after " << k + 1 << " sweeps: 3 are needed";
+// Withdrawal (DriveTrackerOptions::disprove): a track whose doorway later
+// clouds look at (rays reach its rectangle: ending on the wall there, or
+// passing through it) without showing the door is withdrawn after 6 misses
+// per observation, but kept: found again in confirm_clouds clouds it comes
+// back with the id it had, never a second one (issue 20: one id per door per
+// drive). Clouds that do not reach the doorway are no misses.
+TEST(DriveTracker, ADoorwayLookedAtAndNotFoundIsWithdrawnAndComesBackWithItsId) {
+  for (const bool looked_at : {true, false}) {
+    for (const bool doorway : {false, true}) {
+      dsr::DriveTrackerOptions o;
+      o.confirm_clouds = 1;
+      dsr::DriveTracker t(o);
+      ASSERT_TRUE(t.options().disprove) << "on by default";
+      dsr::PipelineResult r;
+      r.doors = {door(Eigen::Vector3d(2, 0, -1), 0.0, false, 0.6, Eigen::Vector3d::UnitY())};
+      const dsr::Parameters p;
+      t.fuse(r, 1.0, p, Eigen::Vector3d::Zero());
+      ASSERT_EQ(t.published().size(), 1u);
+      const std::uint32_t id = t.published()[0].id;
+      const dsr::Pipeline pipeline{p};
+      std::size_t withdrawn = 0;
+      const std::string what = std::string(doorway ? "an open doorway" : "a plain wall") +
+                               (looked_at ? " looked at" : " out of the clouds");
+      for (int k = 0; k < 6; ++k) {
+        pcl::PointCloud<pcl::PointXYZ> c = wallCloud(doorway);
+        if (!looked_at)  // the part of the scene away from the doorway only
+          c.erase(std::remove_if(c.begin(), c.end(), [](const pcl::PointXYZ& q) { return std::abs(q.y) < 1.2 * q.x / 2; }),
+                  c.end());
+        const auto step = t.process(pipeline, c, Eigen::Isometry3d::Identity(), 2.0 + k, false);
+        withdrawn += step.step.disproved;
+        if (k < 5) {
+          EXPECT_EQ(t.published().size(), 1u) << what << ": withdrawn after " << k + 1 << " clouds: 6 are needed";
+        }
+      }
+      EXPECT_EQ(withdrawn, looked_at ? 1u : 0u) << what;
+      EXPECT_EQ(t.published().size(), looked_at ? 0u : 1u) << what;
+      ASSERT_EQ(t.tracks().size(), 1u) << what << ": a withdrawn track is kept";
+      // Found again: published at once (confirm_clouds 1), with its id.
+      t.fuse(r, 9.0, p, Eigen::Vector3d::Zero());
+      ASSERT_EQ(t.published().size(), 1u) << what;
+      EXPECT_EQ(t.published()[0].id, id) << what;
+      EXPECT_EQ(t.tracks().size(), 1u) << what;
     }
-    EXPECT_EQ(disproved, doorway ? 0u : 1u) << (doorway ? "an open doorway" : "a plain wall");
-    EXPECT_EQ(t.tracks().size(), doorway ? 1u : 0u) << (doorway ? "an open doorway" : "a plain wall");
   }
+  // Off (the nodelet's ~withdraw_not_found false): never withdrawn.
+  dsr::DriveTrackerOptions off;
+  off.confirm_clouds = 1;
+  off.disprove = false;
+  dsr::DriveTracker t(off);
+  dsr::PipelineResult r;
+  r.doors = {door(Eigen::Vector3d(2, 0, -1), 0.0, false, 0.6, Eigen::Vector3d::UnitY())};
+  const dsr::Parameters p;
+  t.fuse(r, 1.0, p, Eigen::Vector3d::Zero());
+  const dsr::Pipeline pipeline{p};
+  for (int k = 0; k < 8; ++k) {
+    pcl::PointCloud<pcl::PointXYZ> c = wallCloud(false);
+    t.process(pipeline, c, Eigen::Isometry3d::Identity(), 2.0 + k, false);
+  }
+  EXPECT_EQ(t.published().size(), 1u);
 }

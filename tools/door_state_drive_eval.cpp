@@ -18,7 +18,7 @@ namespace {
 const char* kUsage =
     "usage: door_state_drive_eval [--sensor S] [--seeds A-B] [--every K] [--toggle auto]\n"
     "                             [--toggle-door K:ANGLE@T ...] [--lidar-motion]\n"
-    "                             [--disprove] [--confirm-clouds N] [--confirm-spread M]\n"
+    "                             [--keep-not-found] [--confirm-clouds N] [--confirm-spread M]\n"
     "                             [--config YAML] [--verbose]\n"
     "\n"
     "For each seed, plans the drive of `door_scene_sim --drive --seed S --sensor X`,\n"
@@ -40,8 +40,8 @@ const char* kUsage =
     "  --confirm-clouds N    publish a track once N processed clouds showed it (default 2;\n"
     "                        1 with --confirm-spread 0: every track at once)\n"
     "  --confirm-spread M    ... from sensor positions M metres apart (default 0)\n"
-    "  --disprove            drop tracks whose doorway later sweeps measure as wall\n"
-    "                        (DriveTracker's disproof, off in the nodelet)\n"
+    "  --keep-not-found      never withdraw a track that later clouds look at and do\n"
+    "                        not find (the nodelet's ~withdraw_not_found false)\n"
     "  --config YAML         pipeline parameters (as door_state_cli --config)\n"
     "  --verbose             each drive's doors and changes in the JSON\n"
     "  -h, --help            show this help\n"
@@ -91,8 +91,8 @@ int main(int argc, char** argv) {
         o.lidar_motion = true;
       } else if (a == "--config") {
         o.params = dsr::loadParameters(value());
-      } else if (a == "--disprove") {
-        o.tracker.disprove = true;
+      } else if (a == "--keep-not-found") {
+        o.tracker.disprove = false;
       } else if (a == "--confirm-clouds") {
         const long long k = toInt(a, value());
         if (k < 1 || k > 1000) throw UsageError("--confirm-clouds must be an integer in [1, 1000]");
@@ -126,7 +126,7 @@ int main(int argc, char** argv) {
       for (const auto& c : r.changes)
         latency += " " + clouds(c.latency) + " (from detection " + clouds(c.latency_from_detection) + ")";
       std::cerr << "seed " << seed << " " << o.sensor << ": " << r.processed << "/" << r.frames << " clouds, passed "
-                << passed << ", right " << right << ", false " << r.false_doors << " (" << r.disproved << " disproved), doors with several ids "
+                << passed << ", right " << right << ", false " << r.false_doors << " (" << r.disproved << " withdrawn), doors with several ids "
                 << several << (latency.empty() ? "" : ", change latency" + latency)
                 << (wrong.empty() ? "" : ", wrong" + wrong) << ", " << r.pipeline_ms_median << " ms/cloud\n";
       if (verbose) per.push_back(dsr::eval::toJson(r));

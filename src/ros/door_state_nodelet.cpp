@@ -24,7 +24,9 @@
 // processed clouds (a relocalisation jump) resets the tracks: each with a
 // throttled warning. A track is published once ~confirm_clouds processed
 // clouds (default 2) showed it, from sensor positions ~confirm_spread_m
-// (default 0) apart (DriveTracker: a false door of one cloud is not). Bad input is logged (throttled) and
+// (default 0) apart (DriveTracker: a false door of one cloud is not), and
+// withdrawn (~withdraw_not_found, default true) while later clouds look at
+// its doorway and do not find it (6 times as often as they did). Bad input is logged (throttled) and
 // answered with an empty DoorStateArray carrying the input's header; nothing
 // here may throw into the nodelet manager. Bad ~ parameters at start (unknown
 // name, wrong type, out of range) are refused before dynamic_reconfigure can
@@ -205,6 +207,10 @@ std::vector<std::string> checkPrivateParameters(const ros::NodeHandle& pnh) {
       if (v.getType() != XmlRpc::XmlRpcValue::TypeInt || static_cast<int>(v) < 1) problems.push_back(pname + " is " + got + ": must be an int >= 1");
       continue;
     }
+    if (name == "withdraw_not_found") {
+      if (v.getType() != XmlRpc::XmlRpcValue::TypeBoolean) problems.push_back(pname + " is " + got + ": must be a bool");
+      continue;
+    }
     if (name == "confirm_spread_m") {
       if (!isNumber(v) || !(asDouble(v) >= 0) || !std::isfinite(asDouble(v)))
         problems.push_back(pname + " is " + got + ": must be a number of metres >= 0");
@@ -221,7 +227,7 @@ std::vector<std::string> checkPrivateParameters(const ros::NodeHandle& pnh) {
     }
     const auto c = cfg.find(name);
     if (c == cfg.end()) {
-      problems.push_back(pname + ": unknown parameter (the pipeline's are those of config/default.yaml; the nodelet's own are fixed_frame, viewpoint, tf_queue_size, diagnostic_period, forget_after_s, state_change_deg, max_sensor_speed, confirm_clouds, confirm_spread_m)");
+      problems.push_back(pname + ": unknown parameter (the pipeline's are those of config/default.yaml; the nodelet's own are fixed_frame, viewpoint, tf_queue_size, diagnostic_period, forget_after_s, state_change_deg, max_sensor_speed, confirm_clouds, confirm_spread_m, withdraw_not_found)");
       continue;
     }
     const std::string& type = c->second->type;
@@ -403,6 +409,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
       pnh_.param("max_sensor_speed", o.max_sensor_speed, o.max_sensor_speed);
       pnh_.param("confirm_clouds", o.confirm_clouds, o.confirm_clouds);
       pnh_.param("confirm_spread_m", o.confirm_spread_m, o.confirm_spread_m);
+      pnh_.param("withdraw_not_found", o.disprove, o.disprove);
       drive_ = dsr::DriveTracker(o);  // checked above: cannot throw
     }
     pipeline_ = std::make_shared<const dsr::Pipeline>(params_);
@@ -722,7 +729,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
       noteError("relocalisation jump: tracked doors reset");
     }
     if (step.disproved > 0)
-      NODELET_DEBUG_THROTTLE(5.0, "door_state: %zu tracked door(s) dropped: their doorway measured as wall",
+      NODELET_DEBUG_THROTTLE(5.0, "door_state: %zu tracked door(s) withdrawn: their doorway looked at and not found",
                              step.disproved);
     disproved_ += step.disproved;
     if (step.fusion.outcome == dsr::DoorFusion::Outcome::Reset) {
@@ -837,7 +844,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
       stat.add("tracked doors reset (time went backwards)", fusion_resets_.load());
       stat.add("clouds not fused (out of order)", fusion_ignored_.load());
       stat.add("tracked doors reset (relocalisation)", relocalisations_.load());
-      stat.add("tracked doors dropped (doorway measured as wall)", disproved_.load());
+      stat.add("tracked doors withdrawn (doorway looked at, not found)", disproved_.load());
     }
   }
 

@@ -105,7 +105,7 @@ struct DriveEvalResult {
   std::vector<ChangeOutcome> changes;
   double pipeline_ms_median = 0, fusion_ms_max = 0;
   int relocalisations = 0;                 // resets for a sensor jump (none expected in a simulated drive)
-  int disproved = 0;                       // tracks dropped, their doorway measured as wall (DriveTracker)
+  int disproved = 0;                       // tracks withdrawn, their doorway looked at and not found (DriveTracker)
   int unconfirmed = 0;                     // the last tracks not published (DriveTracker's confirmation)
   std::map<std::uint32_t, double> spread_m;  // by published track id: DriveTracker::spread
 };
