@@ -76,10 +76,8 @@ void DriveTracker::confirm(const Step& s, const std::optional<Eigen::Vector3d>& 
     }
     const bool far = !g.known || g.spread >= options_.confirm_spread_m;
     if (t.observations >= static_cast<std::uint32_t>(options_.confirm_clouds) && far) g.confirmed = true;
-    // A withdrawn track found again in confirm_clouds clouds since is published again, with its id.
-    if (g.withdrawn && t.observations >= g.withdrawn_at + static_cast<std::uint32_t>(options_.confirm_clouds))
-      g.withdrawn = false;
   }
+  standing();  // a withdrawn track seen again may be back
 }
 
 bool DriveTracker::confirmed(std::uint32_t id) const {
@@ -140,7 +138,6 @@ std::size_t DriveTracker::disprove(const pcl::PointCloud<pcl::PointXYZ>& cloud, 
   for (const TrackedDoor& t : fusion_.tracks()) {
     const DoorResult& d = t.door;
     if (t.seen_now || !d.opening_center.allFinite() || (d.opening_center.head<2>() - s2).norm() > kDisproveRange) continue;
-    if (const auto g = sights_.find(t.id); g != sights_.end() && g->second.withdrawn) continue;
     Eigen::Vector2d n = d.wall_normal.head<2>();
     if (!(n.norm() > 0.5) || !d.wall_line_point.allFinite() || !(d.width > 0.3)) continue;
     n.normalize();
@@ -149,8 +146,8 @@ std::size_t DriveTracker::disprove(const pcl::PointCloud<pcl::PointXYZ>& cloud, 
     if (std::abs((s2 - w.q).dot(w.n)) < 0.2) continue;  // the sensor in the wall's plane: no sight across it
     ds.push_back(w);
   }
-  if (ds.empty()) return 0;
-  for (const auto& p : cloud.points) {
+  for (std::size_t k = 0; k < cloud.points.size() && !ds.empty(); ++k) {
+    const auto& p = cloud.points[k];
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
     const Eigen::Vector3d P(p.x, p.y, p.z);
     for (Doorway& w : ds) {
@@ -169,22 +166,24 @@ std::size_t DriveTracker::disprove(const pcl::PointCloud<pcl::PointXYZ>& cloud, 
     for (const TrackedDoor& t : fusion_.tracks()) alive = alive || t.id == it->first;
     it = alive ? std::next(it) : misses_.erase(it);
   }
-  std::size_t dropped = 0;
-  for (const Doorway& w : ds) {
-    if (w.reached < kMinRays) continue;  // this cloud did not look at the doorway
-    const int m = ++misses_[w.id];
-    std::uint32_t obs = 0;
-    for (const TrackedDoor& t : fusion_.tracks())
-      if (t.id == w.id) obs = t.observations;
-    if (m >= kMinMisses && m >= kMissRatio * obs) {
-      Sight& g = sights_[w.id];
-      g.withdrawn = true;
-      g.withdrawn_at = obs;
-      misses_.erase(w.id);
-      ++dropped;
-    }
+  for (const Doorway& w : ds)
+    if (w.reached >= kMinRays) ++misses_[w.id];  // looked at, not shown
+  return standing();
+}
+
+// Every track's standing from its misses and observations: withdrawn while
+// they stand at kMissRatio or more, published again once its observations
+// catch up. Returns how many it withdrew.
+std::size_t DriveTracker::standing() {
+  std::size_t withdrawn = 0;
+  for (const TrackedDoor& t : fusion_.tracks()) {
+    const auto m = misses_.find(t.id);
+    const bool out = m != misses_.end() && m->second >= kMinMisses && m->second >= kMissRatio * t.observations;
+    Sight& g = sights_[t.id];
+    withdrawn += out && !g.withdrawn;
+    g.withdrawn = out;
   }
-  return dropped;
+  return withdrawn;
 }
 
 void DriveTracker::reset() {

@@ -25,10 +25,10 @@
 // the sensor within 4 m (horizontally) and off the wall's plane. Such a
 // cloud that does not show the door is a miss. A track with at least 3
 // misses and at least 6 times as many misses as observations is withdrawn
-// (Step::disproved): kept, matched and counted as any track, its id held,
-// but not published; found again in confirm_clouds more clouds, it is
-// published again with the same id (one id per door per drive). Misses
-// count again from then. On the tuning drives (doc/results.md, "Drives:
+// (Step::disproved counts the tracks withdrawn by this cloud): kept, matched
+// and counted as any track, its id held, but not published; once its
+// observations catch up with its misses (fewer than 6 misses each) it is
+// published again with the same id (one id per door per drive). On the tuning drives (doc/results.md, "Drives:
 // doors looked at and not found") it took 7 -> 4 false doors of lidar64 and
 // 10 -> 6 of the camera, for one passed door of the camera (seen in 2
 // clouds).
@@ -88,7 +88,7 @@ class DriveTracker {
     double newest_before = 0;     // the newest stamp fused before this cloud (NaN: none)
     bool relocalised = false;     // the tracks were reset for a sensor jump
     double moved_m = 0, dt_s = 0; // that jump: distance and time between the two clouds
-    std::size_t disproved = 0;    // tracks withdrawn: looked at and not found (process() only)
+    std::size_t disproved = 0;    // tracks withdrawn by this cloud: looked at and not found (process() only)
   };
   struct Processed {
     PipelineResult result;        // in the fixed frame
@@ -134,6 +134,8 @@ class DriveTracker {
  private:
   // Counts misses (doorway looked at, door not shown) and withdraws the disproved tracks.
   std::size_t disprove(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vector3d& sensor);
+  // Withdraws or restores every track by its misses and observations; returns how many it withdrew.
+  std::size_t standing();
 
   DriveTrackerOptions options_;
   DoorFusion fusion_;
@@ -144,8 +146,7 @@ class DriveTracker {
     bool known = false;                               // first holds a position
     double spread = 0;                                // m, farthest position from first
     bool confirmed = false;
-    bool withdrawn = false;          // disproved: kept (matched, its id held) but not published
-    std::uint32_t withdrawn_at = 0;  // its observations when withdrawn
+    bool withdrawn = false;  // disproved: kept (matched, its id held) but not published
   };
 
   std::map<std::uint32_t, int> misses_;  // by track id
