@@ -28,10 +28,12 @@
 // (Step::disproved counts the tracks withdrawn by this cloud): kept, matched
 // and counted as any track, its id held, but not published; once its
 // observations catch up with its misses (fewer than 6 misses each) it is
-// published again with the same id (one id per door per drive). On the tuning drives (doc/results.md, "Drives:
-// doors looked at and not found") it took 7 -> 4 false doors of lidar64 and
-// 10 -> 6 of the camera, for one passed door of the camera (seen in 2
-// clouds).
+// published again with the same id (one id per door per drive). On the
+// tuning drives 1000-1019 it took lidar64's false doors 7 -> 3 and the
+// camera's 10 -> 6, for one passed closed door that the camera and the
+// 16-beam LiDAR find in 2-3 of the clouds looking at it; on the untouched
+// drives 3000-3019, 33 -> 17 false doors over four sensors for 3 of 172
+// passed doors (doc/results.md, "Drives: doors looked at and not found").
 //
 // Confirmation (options.confirm_clouds, options.confirm_spread_m): a door is
 // a fixed structure that the sensor finds again in the next clouds, while
