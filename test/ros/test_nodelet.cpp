@@ -751,6 +751,7 @@ TEST(BadParameters, TheNodeletRefusesThemStaysUpAndSaysWhy) {
       {"wall_distance", "a string", "a number in [0.002, 0.5]", "2e-2"},
       {"voxel_sise", "unknown parameter"},
       {"random_seed", "2000000", "[0, 1000000]"},
+      {"withdraw_not_found", "must be a bool"},
   };
   for (const auto& words : named) {
     SCOPED_TRACE(words.front());
