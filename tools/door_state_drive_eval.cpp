@@ -128,7 +128,7 @@ int main(int argc, char** argv) {
       std::cerr << "seed " << seed << " " << o.sensor << ": " << r.processed << "/" << r.frames << " clouds, passed "
                 << passed << ", right " << right << ", false " << r.false_doors << " (" << r.disproved << " withdrawn), doors with several ids "
                 << several << (latency.empty() ? "" : ", change latency" + latency)
-                << (wrong.empty() ? "" : ", wrong" + wrong) << ", " << r.pipeline_ms_median << " ms/cloud\n";
+                << (wrong.empty() ? "" : ", wrong" + wrong) << ", " << r.pipeline_ms_median << " ms/cloud (fusion " << r.fusion_ms_median << ", max " << r.fusion_ms_max << ")\n";
       if (verbose) per.push_back(dsr::eval::toJson(r));
     }
     nlohmann::json out = dsr::eval::summarize(drives);

@@ -37,7 +37,8 @@ PipelineResult DriveTracker::run(const Pipeline& pipeline, pcl::PointCloud<pcl::
 }
 
 DriveTracker::Step DriveTracker::fuse(const PipelineResult& result, double stamp, const Parameters& params,
-                                      const std::optional<Eigen::Vector3d>& sensor) {
+                                      const std::optional<Eigen::Vector3d>& sensor,
+                                      const pcl::PointCloud<pcl::PointXYZ>* cloud) {
   Step s;
   if (sensor && last_sensor_ && options_.max_sensor_speed > 0 && stamp >= last_sensor_stamp_) {
     s.moved_m = (*sensor - *last_sensor_).norm();
@@ -59,6 +60,8 @@ DriveTracker::Step DriveTracker::fuse(const PipelineResult& result, double stamp
   s.newest_before = fusion_.newestStamp();
   s.fusion = fusion_.update(result.doors, stamp, result.up);
   confirm(s, sensor);
+  if (options_.disprove && cloud && sensor && s.fusion.outcome == DoorFusion::Outcome::Fused)
+    s.disproved = disprove(*cloud, *sensor);
   return s;
 }
 
@@ -104,16 +107,14 @@ DriveTracker::Processed DriveTracker::process(const Pipeline& pipeline, pcl::Poi
   p.result = run(pipeline, cloud, sensor_to_fixed, with_reconstruction, without_viewpoint);
   std::optional<Eigen::Vector3d> sensor;
   if (sensor_to_fixed) sensor = sensor_to_fixed->translation();
-  p.step = fuse(p.result, stamp, pipeline.parameters(), sensor);
-  if (options_.disprove && sensor && p.step.fusion.outcome == DoorFusion::Outcome::Fused)
-    p.step.disproved = disprove(cloud, *sensor);
+  p.step = fuse(p.result, stamp, pipeline.parameters(), sensor, &cloud);
   return p;
 }
 
 namespace {
 
 constexpr double kDisproveRange = 4.0;  // m, sensor to opening centre, horizontal
-constexpr double kOnPlane = 0.05;       // m
+constexpr float kOnPlane = 0.05f;       // m
 constexpr int kMinRays = 30;            // rays reaching a doorway for a cloud to have looked at it
 constexpr int kMinMisses = 3;
 // Clouds that looked at a doorway without showing its door, per cloud that
@@ -122,12 +123,17 @@ constexpr int kMinMisses = 3;
 // frames that see them), 6 one, 10 none but kept more false doors.
 constexpr double kMissRatio = 6.0;
 
-// The doorway of a track as a rectangle on its wall's plane.
+// The doorway of a track as a rectangle on its wall's plane, in float (one
+// pass over every point of the cloud for each doorway still counting).
 struct Doorway {
   std::uint32_t id;
-  Eigen::Vector2d q, n, e;  // a point of the plane, its unit normal, along the wall (horizontal)
-  double centre, half, floor;
-  int reached = 0;  // rays that ended on the doorway's rectangle or passed through it
+  float nx, ny, c;       // the plane: n.p = c (n unit, horizontal)
+  float ex, ey;          // along the wall (horizontal)
+  float centre, half;    // of the rectangle along e (e.p), half its width
+  float floor;           // z of the doorway's floor
+  float side;            // +1 or -1: the sensor's side of the plane
+  float dsn;             // the sensor's signed distance to the plane
+  int reached = 0;       // rays that ended on the doorway's rectangle or passed through it (counted to kMinRays)
 };
 
 }  // namespace
@@ -141,24 +147,35 @@ std::size_t DriveTracker::disprove(const pcl::PointCloud<pcl::PointXYZ>& cloud, 
     Eigen::Vector2d n = d.wall_normal.head<2>();
     if (!(n.norm() > 0.5) || !d.wall_line_point.allFinite() || !(d.width > 0.3)) continue;
     n.normalize();
-    Doorway w{t.id, d.wall_line_point.head<2>(), n, Eigen::Vector2d(-n.y(), n.x()), 0, 0.4 * d.width, d.opening_center.z()};
-    w.centre = (d.opening_center.head<2>() - w.q).dot(w.e);
-    if (std::abs((s2 - w.q).dot(w.n)) < 0.2) continue;  // the sensor in the wall's plane: no sight across it
+    const Eigen::Vector2d q = d.wall_line_point.head<2>(), e(-n.y(), n.x());
+    const double dsn = (s2 - q).dot(n);
+    if (std::abs(dsn) < 0.2) continue;  // the sensor in the wall's plane: no sight across it
+    Doorway w;
+    w.id = t.id;
+    w.nx = static_cast<float>(n.x()), w.ny = static_cast<float>(n.y()), w.c = static_cast<float>(q.dot(n));
+    w.ex = static_cast<float>(e.x()), w.ey = static_cast<float>(e.y());
+    w.centre = static_cast<float>(d.opening_center.head<2>().dot(e)), w.half = static_cast<float>(0.4 * d.width);
+    w.floor = static_cast<float>(d.opening_center.z());
+    w.side = dsn > 0 ? 1.0f : -1.0f, w.dsn = static_cast<float>(dsn);
     ds.push_back(w);
   }
-  for (std::size_t k = 0; k < cloud.points.size() && !ds.empty(); ++k) {
+  const float sx = static_cast<float>(sensor.x()), sy = static_cast<float>(sensor.y()), sz = static_cast<float>(sensor.z());
+  std::size_t counting = ds.size();  // ds[0, counting) still below kMinRays
+  for (std::size_t k = 0; k < cloud.points.size() && counting > 0; ++k) {
     const auto& p = cloud.points[k];
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
-    const Eigen::Vector3d P(p.x, p.y, p.z);
-    for (Doorway& w : ds) {
-      const double dsn = (s2 - w.q).dot(w.n), dpn = (P.head<2>() - w.q).dot(w.n);
-      const bool on = std::abs(dpn) <= kOnPlane;
-      if (!on && (dsn > 0) == (dpn > 0)) continue;  // ended before the plane
-      const double lambda = on ? 1.0 : dsn / (dsn - dpn);
-      const Eigen::Vector3d x = sensor + lambda * (P - sensor);
-      const double along = (x.head<2>() - w.q).dot(w.e) - w.centre, h = x.z() - w.floor;
-      if (std::abs(along) > w.half || h < 0.3 || h > 1.8) continue;
-      ++w.reached;
+    for (std::size_t i = 0; i < counting; ++i) {
+      Doorway& w = ds[i];
+      const float dpn = p.x * w.nx + p.y * w.ny - w.c;
+      // Positive forms throughout: a NaN or infinite point fails every test.
+      if (!(w.side * dpn <= kOnPlane)) continue;  // ended before the plane
+      float x = p.x, y = p.y, z = p.z;
+      if (!(std::abs(dpn) <= kOnPlane)) {  // passed through it: where
+        const float lambda = w.dsn / (w.dsn - dpn);
+        x = sx + lambda * (p.x - sx), y = sy + lambda * (p.y - sy), z = sz + lambda * (p.z - sz);
+      }
+      const float along = x * w.ex + y * w.ey - w.centre, h = z - w.floor;
+      if (!(std::abs(along) <= w.half && h >= 0.3f && h <= 1.8f)) continue;
+      if (++w.reached >= kMinRays) std::swap(ds[i--], ds[--counting]);  // looked at: no need to count on
     }
   }
   for (auto it = misses_.begin(); it != misses_.end();) {  // forget the tracks gone (forgotten, joined)

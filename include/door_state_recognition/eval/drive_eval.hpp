@@ -103,7 +103,8 @@ struct DriveEvalResult {
   int false_doors = 0;
   std::vector<TrackedDoor> false_tracks;   // the last tracks matching no truth door
   std::vector<ChangeOutcome> changes;
-  double pipeline_ms_median = 0, fusion_ms_max = 0;
+  double pipeline_ms_median = 0;           // per processed cloud: DriveTracker::run (the pipeline)
+  double fusion_ms_median = 0, fusion_ms_max = 0;  // DriveTracker::fuse with the withdrawal pass
   int relocalisations = 0;                 // resets for a sensor jump (none expected in a simulated drive)
   int disproved = 0;                       // tracks withdrawn, their doorway looked at and not found (DriveTracker)
   int unconfirmed = 0;                     // the last tracks not published (DriveTracker's confirmation)

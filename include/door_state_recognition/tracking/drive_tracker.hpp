@@ -13,8 +13,8 @@
 // Not judged when the sensor is unknown (a cloud arriving in the fixed frame
 // already) nor across stamps going backwards (DoorFusion resets then anyway).
 //
-// Withdrawal (options.disprove, on by default; process() only: it needs the
-// points and the sensor): a door is a fixed structure, found again in a
+// Withdrawal (options.disprove, on by default; process(), or fuse() given the
+// cloud: it needs the points and the sensor): a door is a fixed structure, found again in a
 // good share of the clouds that look at it (a 64-beam sweep in 9 of 10, a
 // 320x240 camera in fewer), while a door made of one view's artefacts (trim
 // legs from range noise, the gap between two cupboards, a shadow on a plain
@@ -90,7 +90,7 @@ class DriveTracker {
     double newest_before = 0;     // the newest stamp fused before this cloud (NaN: none)
     bool relocalised = false;     // the tracks were reset for a sensor jump
     double moved_m = 0, dt_s = 0; // that jump: distance and time between the two clouds
-    std::size_t disproved = 0;    // tracks withdrawn by this cloud: looked at and not found (process() only)
+    std::size_t disproved = 0;    // tracks withdrawn by this cloud: looked at and not found (given the cloud)
   };
   struct Processed {
     PipelineResult result;        // in the fixed frame
@@ -112,9 +112,10 @@ class DriveTracker {
   // The doors of one processed cloud, in the fixed frame, into the tracks:
   // the relocalisation check (sensor: its position in the fixed frame, none
   // when unknown), the pipeline's thresholds into the fusion options, then
-  // DoorFusion::update.
+  // DoorFusion::update; with the cloud (in the fixed frame) and the sensor
+  // known, the withdrawal pass (options.disprove) over its points.
   Step fuse(const PipelineResult& result, double stamp, const Parameters& params,
-            const std::optional<Eigen::Vector3d>& sensor);
+            const std::optional<Eigen::Vector3d>& sensor, const pcl::PointCloud<pcl::PointXYZ>* cloud = nullptr);
 
   // run() then fuse(), the sensor known exactly when sensor_to_fixed is.
   Processed process(const Pipeline& pipeline, pcl::PointCloud<pcl::PointXYZ>& cloud,
