@@ -151,16 +151,9 @@ DriveEvalResult evaluateDrive(std::uint64_t seed, const DriveEvalOptions& o) {
     xyz.is_dense = false;
     xyz.points.reserve(f.cloud.cloud.size());
     for (const auto& q : f.cloud.cloud.points) xyz.points.emplace_back(q.x, q.y, q.z);
-    // process(), timed in its two parts: the pipeline and the fusion.
-    const auto t0 = std::chrono::steady_clock::now();
-    DriveTracker::Processed step;
-    step.result = DriveTracker::run(pipeline, xyz, f.cloud.sensor_to_world, false);
-    const auto t1 = std::chrono::steady_clock::now();
-    const Eigen::Vector3d sensor = f.cloud.sensor_to_world.translation();
-    step.step = tracker.fuse(step.result, f.t, pipeline.parameters(), sensor, &xyz);
-    const auto t2 = std::chrono::steady_clock::now();
-    times.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
-    fusion_times.push_back(std::chrono::duration<double, std::milli>(t2 - t1).count());
+    const DriveTracker::Processed step = tracker.process(pipeline, xyz, f.cloud.sensor_to_world, f.t, false);
+    times.push_back(step.run_ms);
+    fusion_times.push_back(step.fuse_ms);
     if (step.step.relocalised) ++r.relocalisations;
     r.disproved += static_cast<int>(step.step.disproved);
     ++r.processed;

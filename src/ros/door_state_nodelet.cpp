@@ -661,6 +661,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
           drive_.process(*pipeline, cloud_, to_fixed, msg->header.stamp.toSec(), wantWalls(), without_viewpoint_);
       result = std::move(p.result);
       step = p.step;
+      last_fuse_ms_ = p.fuse_ms;
     }
     if (!result.warnings.empty()) {
       std::string all;
@@ -841,6 +842,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
     stat.add("fixed frame", fixed_frame_.empty() ? std::string("(cloud frame)") : fixed_frame_);
     if (!fixed_frame_.empty()) {
       stat.add("tracked doors", tracked_count_.load());
+      stat.add("last fusion time (ms)", last_fuse_ms_.load());
       stat.add("tracked doors reset (time went backwards)", fusion_resets_.load());
       stat.add("clouds not fused (out of order)", fusion_ignored_.load());
       stat.add("tracked doors reset (relocalisation)", relocalisations_.load());
@@ -889,7 +891,7 @@ class DoorStateNodelet : public nodelet::Nodelet {
   Window processing_ms_, in_node_ms_, age_ms_;  // under diag_mutex_
   unsigned long last_in_ = 0;
   ros::WallTime last_diag_;
-  std::atomic<double> last_ms_{0.0};
+  std::atomic<double> last_ms_{0.0}, last_fuse_ms_{0.0};  // fuse: DriveTracker::fuse, a part of last_ms_
   std::string last_error_;
   ros::WallTime last_error_time_;
   std::string refused_;          // set once in onInit: bad ~ parameters, not started

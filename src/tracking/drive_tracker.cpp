@@ -1,5 +1,6 @@
 #include "door_state_recognition/tracking/drive_tracker.hpp"
 
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -104,10 +105,14 @@ DriveTracker::Processed DriveTracker::process(const Pipeline& pipeline, pcl::Poi
                                               const std::optional<Eigen::Isometry3d>& sensor_to_fixed, double stamp,
                                               bool with_reconstruction, bool without_viewpoint) {
   Processed p;
+  const auto t0 = std::chrono::steady_clock::now();
   p.result = run(pipeline, cloud, sensor_to_fixed, with_reconstruction, without_viewpoint);
+  const auto t1 = std::chrono::steady_clock::now();
   std::optional<Eigen::Vector3d> sensor;
   if (sensor_to_fixed) sensor = sensor_to_fixed->translation();
   p.step = fuse(p.result, stamp, pipeline.parameters(), sensor, &cloud);
+  p.run_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
+  p.fuse_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count();
   return p;
 }
 

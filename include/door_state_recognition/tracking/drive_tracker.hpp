@@ -95,6 +95,7 @@ class DriveTracker {
   struct Processed {
     PipelineResult result;        // in the fixed frame
     Step step;
+    double run_ms = 0, fuse_ms = 0;  // wall-clock time of run() and of fuse()
   };
 
   // Throws std::invalid_argument for options out of range.
