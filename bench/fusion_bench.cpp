@@ -7,8 +7,8 @@
 //     clouds of simulated drive 1000, lidar64 and rgbd, every 10th frame
 //     moved into the map frame. Three track sets per cloud: the scene's true
 //     doors (the pass stops counting a doorway at 30 rays reaching it), and
-//     4 and 8 doorways within 4 m that no ray reaches (set 1 m above the
-//     ceiling: the whole cloud is read for each, the worst case).
+//     4 and 8 doorways within 4 m that no ray reaches (their floor 5 m up,
+//     above any ceiling: the whole cloud is read for each, the worst case).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
