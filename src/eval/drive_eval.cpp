@@ -1,7 +1,6 @@
 #include "door_state_recognition/eval/drive_eval.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <map>
 #include <set>
