@@ -435,6 +435,31 @@ const eval::DoorMatch* expectFoundAlone(const Scored& s, int door) {
   return m;
 }
 
+TEST(Segmentation, AWallInACameraNoiseIsFittedToConvergence) {
+  // A robot camera (default depth model, tuning seed 1018: 0.96 m high, 3 m
+  // from a wall holding a closed door set 3 cm back, trim 1.8 cm proud):
+  // the depth noise (1.3 cm there) against the 3 cm inlier band held the
+  // refit near RANSAC's hypothesis, 1.2 deg off the wall, and the tilt over
+  // the wall's 3.5 m hid the trim and the leaf behind a ramp of 4 cm. Fitted
+  // to convergence, the wall is within 0.5 deg and the door found closed.
+  const std::uint64_t seed = 1018;
+  const Scored s = runRobotFrame(seed, sim::DepthModel::Default, false);
+  SCOPED_TRACE(::testing::Message() << "seed=" << seed << " " << describe(s) << trace(s));
+  const auto& d = s.truth["doors"][0];
+  const Eigen::Vector3d up(s.truth["up"][0], s.truth["up"][1], s.truth["up"][2]);
+  const Eigen::Vector3d n(d["wall_normal"][0], d["wall_normal"][1], d["wall_normal"][2]);
+  const Eigen::Vector3d c(d["opening_center"][0], d["opening_center"][1], d["opening_center"][2]);
+  const Eigen::Vector3d axis = up.cross(n).normalized();
+  const WallResult* wall = nullptr;  // the found wall on the door's plane (its face 5-8 cm off the mid-wall centre)
+  for (const WallResult& w : s.result.walls)
+    if (std::abs((w.line_point - c).dot(n)) < 0.15 && (!wall || std::abs((w.line_point - c).dot(n)) < std::abs((wall->line_point - c).dot(n))))
+      wall = &w;
+  ASSERT_NE(wall, nullptr) << "the door's wall not found";
+  const double off = std::acos(std::min(1.0, std::abs(wall->line_direction.normalized().dot(axis)))) * 180 / M_PI;
+  EXPECT_LT(off, 0.5) << "wall direction off by " << off << " deg";
+  expectFoundAlone(s, 0);
+}
+
 TEST(DoorState, AnglesOfSingleDoorsBothSidesBothHinges) {
   // Leaves the scanner can see: towards it at any angle, away from it up to
   // the angle where the jamb starts to hide the leaf.

@@ -152,6 +152,43 @@ TEST(Sight, AGapBetweenCupboardsIsNoDoorway) {
   }
 }
 
+// A LiDAR's walls are fitted where its noise lies well inside the inlier
+// band: the refit passes past the third turn them by hundredths of a degree,
+// and such a turn (taken before, segmentation/wall_search.cpp) moved which
+// noise points sat at the band's edge: in clouds 12 and 21 of lidar64 drive
+// 1018 (in map, as the nodelet runs them) the closed door on the west wall
+// lost a trim leg and a "closed door" was paired from its other leg to the
+// corner, 0.8 m off.
+TEST(Sight, ALidarWallAlreadyFittedIsNotTurned) {
+  sim::DriveOptions d;
+  d.sensor = "lidar64";
+  d.seed = 1018;
+  const sim::DrivePlan plan = sim::planDrive(sim::randomRoom(1018), d);
+  const Pipeline pipe{Parameters()};
+  for (const std::size_t i : {std::size_t{12}, std::size_t{21}}) {
+    const sim::DriveFrame f = sim::simulateFrame(plan, i);
+    pcl::PointCloud<pcl::PointXYZ> cloud = xyz(f.cloud.cloud);
+    for (auto& q : cloud.points)
+      if (std::isfinite(q.x)) q.getVector3fMap() = (f.cloud.sensor_to_world * q.getVector3fMap().cast<double>()).cast<float>();
+    const PipelineResult r = pipe.run(cloud, false, f.cloud.sensor_to_world.translation());
+    const sim::Scene& scene = plan.scenes[static_cast<std::size_t>(f.scene_index)];
+    ASSERT_EQ(scene.doors.size(), 1u);
+    const Eigen::Vector3d truth = scene.doors[0].opening_center;
+    int at_door = 0;
+    for (const DoorResult& door : r.doors) {
+      // (Frame 21's other false door, 1.4 m wide between the two cupboards
+      // on the south wall, is another matter: one cloud only, the drive's
+      // confirmation leaves it out.)
+      const double off = (truth - door.opening_center).head<2>().norm();
+      if (off > 1.5) continue;
+      EXPECT_LT(off, 0.15) << "drive 1018 frame " << i << ": a door beside the closed one, at (" << door.opening_center.x()
+                           << ", " << door.opening_center.y() << ")\n" << doors(r);
+      at_door += off < 0.15;
+    }
+    EXPECT_EQ(at_door, 1) << "drive 1018 frame " << i << ": the closed door" << doors(r);
+  }
+}
+
 TEST(Sight, WithoutAViewpointAMergedRoomGetsItsDoors) {
   // Rooms of three stations merged into one cloud, run without a viewpoint:
   // the stations are inferred from the surfaces. Doors out of every
