@@ -53,6 +53,21 @@ std::string doors(const PipelineResult& r) {
   return os.str();
 }
 
+// Cloud i of a drive, moved into map and run as the nodelet runs it (the
+// sensor's origin the viewpoint), with the scene it shows.
+struct DriveCloud {
+  PipelineResult result;
+  sim::Scene scene;
+};
+DriveCloud runDriveCloud(const sim::DrivePlan& plan, std::size_t i) {
+  const sim::DriveFrame f = sim::simulateFrame(plan, i);
+  pcl::PointCloud<pcl::PointXYZ> cloud = xyz(f.cloud.cloud);
+  for (auto& q : cloud.points)
+    if (std::isfinite(q.x)) q.getVector3fMap() = (f.cloud.sensor_to_world * q.getVector3fMap().cast<double>()).cast<float>();
+  const Pipeline pipe{Parameters()};
+  return {pipe.run(cloud, false, f.cloud.sensor_to_world.translation()), plan.scenes[static_cast<std::size_t>(f.scene_index)]};
+}
+
 }  // namespace
 
 TEST(Sight, OneScansOwnViewpointIsCredibleAndAPointOutsideTheRoomIsNot) {
@@ -135,14 +150,10 @@ TEST(Sight, AGapBetweenCupboardsIsNoDoorway) {
   d.sensor = "lidar64";
   d.seed = 1005;
   const sim::DrivePlan plan = sim::planDrive(sim::randomRoom(1005), d);
-  const Pipeline pipe{Parameters()};
   for (const std::size_t i : {std::size_t{0}, std::size_t{3}}) {
-    const sim::DriveFrame f = sim::simulateFrame(plan, i);
-    pcl::PointCloud<pcl::PointXYZ> cloud = xyz(f.cloud.cloud);
-    for (auto& q : cloud.points)
-      if (std::isfinite(q.x)) q.getVector3fMap() = (f.cloud.sensor_to_world * q.getVector3fMap().cast<double>()).cast<float>();
-    const PipelineResult r = pipe.run(cloud, false, f.cloud.sensor_to_world.translation());
-    const sim::Scene& scene = plan.scenes[static_cast<std::size_t>(f.scene_index)];
+    const DriveCloud c = runDriveCloud(plan, i);
+    const PipelineResult& r = c.result;
+    const sim::Scene& scene = c.scene;
     for (const DoorResult& door : r.doors) {
       double nearest = std::numeric_limits<double>::infinity();
       for (const auto& t : scene.doors) nearest = std::min(nearest, (t.opening_center - door.opening_center).head<2>().norm());
@@ -164,14 +175,10 @@ TEST(Sight, ALidarWallAlreadyFittedIsNotTurned) {
   d.sensor = "lidar64";
   d.seed = 1018;
   const sim::DrivePlan plan = sim::planDrive(sim::randomRoom(1018), d);
-  const Pipeline pipe{Parameters()};
   for (const std::size_t i : {std::size_t{12}, std::size_t{21}}) {
-    const sim::DriveFrame f = sim::simulateFrame(plan, i);
-    pcl::PointCloud<pcl::PointXYZ> cloud = xyz(f.cloud.cloud);
-    for (auto& q : cloud.points)
-      if (std::isfinite(q.x)) q.getVector3fMap() = (f.cloud.sensor_to_world * q.getVector3fMap().cast<double>()).cast<float>();
-    const PipelineResult r = pipe.run(cloud, false, f.cloud.sensor_to_world.translation());
-    const sim::Scene& scene = plan.scenes[static_cast<std::size_t>(f.scene_index)];
+    const DriveCloud c = runDriveCloud(plan, i);
+    const PipelineResult& r = c.result;
+    const sim::Scene& scene = c.scene;
     ASSERT_EQ(scene.doors.size(), 1u);
     const Eigen::Vector3d truth = scene.doors[0].opening_center;
     int at_door = 0;
