@@ -59,6 +59,14 @@ struct DriveCloud {
   PipelineResult result;
   sim::Scene scene;
 };
+// The drive door_scene_sim --drive --sensor lidar64 --seed SEED plans.
+sim::DrivePlan lidar64Drive(std::uint64_t seed) {
+  sim::DriveOptions d;
+  d.sensor = "lidar64";
+  d.seed = seed;
+  return sim::planDrive(sim::randomRoom(seed), d);
+}
+
 DriveCloud runDriveCloud(const sim::DrivePlan& plan, std::size_t i) {
   const sim::DriveFrame f = sim::simulateFrame(plan, i);
   pcl::PointCloud<pcl::PointXYZ> cloud = xyz(f.cloud.cloud);
@@ -146,10 +154,7 @@ TEST(Sight, RaySpacingIsThePixelPitchOrTheRingPitch) {
 // than a wall is thick for a closed one. Frames 0 and 3 of drive 1005 (in
 // map, as the nodelet runs them) made it a door before.
 TEST(Sight, AGapBetweenCupboardsIsNoDoorway) {
-  sim::DriveOptions d;
-  d.sensor = "lidar64";
-  d.seed = 1005;
-  const sim::DrivePlan plan = sim::planDrive(sim::randomRoom(1005), d);
+  const sim::DrivePlan plan = lidar64Drive(1005);
   for (const std::size_t i : {std::size_t{0}, std::size_t{3}}) {
     const DriveCloud c = runDriveCloud(plan, i);
     const PipelineResult& r = c.result;
@@ -171,10 +176,7 @@ TEST(Sight, AGapBetweenCupboardsIsNoDoorway) {
 // lost a trim leg and a "closed door" was paired from its other leg to the
 // corner, 0.8 m off.
 TEST(Sight, ALidarWallAlreadyFittedIsNotTurned) {
-  sim::DriveOptions d;
-  d.sensor = "lidar64";
-  d.seed = 1018;
-  const sim::DrivePlan plan = sim::planDrive(sim::randomRoom(1018), d);
+  const sim::DrivePlan plan = lidar64Drive(1018);
   for (const std::size_t i : {std::size_t{12}, std::size_t{21}}) {
     const DriveCloud c = runDriveCloud(plan, i);
     const PipelineResult& r = c.result;
