@@ -435,6 +435,33 @@ const eval::DoorMatch* expectFoundAlone(const Scored& s, int door) {
   return m;
 }
 
+// A plane parallel to a longer wall and in front of it at a cupboard's depth
+// (0.25-0.8 m), along it, is the fronts of furniture; one behind the wall
+// (a room beyond), one farther in front (no cupboard that deep), one longer
+// than the wall, or one with the viewpoint between it and the wall is not.
+TEST(Segmentation, FurnitureFrontsStandInFrontOfALongerWall) {
+  auto plane = [](double y, double s0, double s1) {
+    segmentation::WallPlane w;
+    w.point = Eigen::Vector2d(0, y);
+    w.direction = Eigen::Vector2d(1, 0);
+    w.normal = Eigen::Vector2d(0, 1);
+    w.s_min = s0;
+    w.s_max = s1;
+    return w;
+  };
+  const Eigen::Vector2d viewpoint(0.5, 3.0);
+  using V = std::vector<char>;
+  EXPECT_EQ(segmentation::furnitureFronts({plane(0, -3, 3), plane(0.45, -2, 0)}, viewpoint), (V{0, 1}));
+  EXPECT_EQ(segmentation::furnitureFronts({plane(0, -3, 3), plane(0.45, -3.6, -1.5)}, viewpoint), (V{0, 1}))
+      << "its end past where the wall is seen";
+  EXPECT_EQ(segmentation::furnitureFronts({plane(0, -3, 3), plane(-0.45, -2, 0)}, viewpoint), (V{0, 0})) << "behind";
+  EXPECT_EQ(segmentation::furnitureFronts({plane(0, -3, 3), plane(1.2, -2, 0)}, viewpoint), (V{0, 0})) << "a room's depth";
+  EXPECT_EQ(segmentation::furnitureFronts({plane(0, -1, 1), plane(0.45, -3, 3)}, viewpoint), (V{0, 0})) << "longer";
+  EXPECT_EQ(segmentation::furnitureFronts({plane(0, -3, 3), plane(0.45, 2.5, 5)}, viewpoint), (V{0, 0})) << "beside it";
+  EXPECT_EQ(segmentation::furnitureFronts({plane(0, -3, 3), plane(0.45, -2, 0)}, Eigen::Vector2d(0, 0.3)), (V{0, 0}))
+      << "the viewpoint between";
+}
+
 TEST(Segmentation, AWallInACameraNoiseIsFittedToConvergence) {
   // A robot camera (default depth model, tuning seed 1018: 0.96 m high, 3 m
   // from a wall holding a closed door set 3 cm back, trim 1.8 cm proud):

@@ -59,10 +59,10 @@ struct DriveCloud {
   PipelineResult result;
   sim::Scene scene;
 };
-// The drive door_scene_sim --drive --sensor lidar64 --seed SEED plans.
-sim::DrivePlan lidar64Drive(std::uint64_t seed) {
+// The drive door_scene_sim --drive --sensor SENSOR --seed SEED plans.
+sim::DrivePlan plannedDrive(const char* sensor, std::uint64_t seed) {
   sim::DriveOptions d;
-  d.sensor = "lidar64";
+  d.sensor = sensor;
   d.seed = seed;
   return sim::planDrive(sim::randomRoom(seed), d);
 }
@@ -154,7 +154,7 @@ TEST(Sight, RaySpacingIsThePixelPitchOrTheRingPitch) {
 // than a wall is thick for a closed one. Frames 0 and 3 of drive 1005 (in
 // map, as the nodelet runs them) made it a door before.
 TEST(Sight, AGapBetweenCupboardsIsNoDoorway) {
-  const sim::DrivePlan plan = lidar64Drive(1005);
+  const sim::DrivePlan plan = plannedDrive("lidar64", 1005);
   for (const std::size_t i : {std::size_t{0}, std::size_t{3}}) {
     const DriveCloud c = runDriveCloud(plan, i);
     const PipelineResult& r = c.result;
@@ -168,6 +168,27 @@ TEST(Sight, AGapBetweenCupboardsIsNoDoorway) {
   }
 }
 
+// Two cupboards 0.41 and 0.58 m deep against a wall, 0.8 m apart: a 16-beam
+// LiDAR sees their fronts as one plane (fitted through both, 5 deg off the
+// wall) with a gap, and the wall behind it through the gap and above them. The
+// plane stands in front of the longer wall at a cupboard's depth: furniture,
+// not a wall (segmentation::furnitureFronts). Cloud 10 of drive 1008 (in map,
+// as the nodelet runs it) made the gap a semi-open door at 11 deg before.
+TEST(Sight, TheFrontsOfCupboardsAgainstAWallAreNoWall) {
+  const DriveCloud c = runDriveCloud(plannedDrive("lidar16", 1008), 10);
+  int found = 0;
+  for (const DoorResult& door : c.result.doors) {
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const auto& t : c.scene.doors) nearest = std::min(nearest, (t.opening_center - door.opening_center).head<2>().norm());
+    EXPECT_LT(nearest, 0.5) << "drive 1008 frame 10: a door where none is, at (" << door.opening_center.x() << ", "
+                            << door.opening_center.y() << ")\n" << doors(c.result);
+    found += nearest < 0.5;
+  }
+  // (The open door's leaf is out of sight of this cloud: its doorway, seen
+  // only through a few rings, is not always found.)
+  EXPECT_GE(found, 1) << "drive 1008 frame 10: the semi-open door" << doors(c.result);
+}
+
 // A LiDAR's walls are fitted where its noise lies well inside the inlier
 // band: the refit passes past the third turn them by hundredths of a degree,
 // and such a turn (taken before, segmentation/wall_search.cpp) moved which
@@ -176,7 +197,7 @@ TEST(Sight, AGapBetweenCupboardsIsNoDoorway) {
 // lost a trim leg and a "closed door" was paired from its other leg to the
 // corner, 0.8 m off.
 TEST(Sight, ALidarWallAlreadyFittedIsNotTurned) {
-  const sim::DrivePlan plan = lidar64Drive(1018);
+  const sim::DrivePlan plan = plannedDrive("lidar64", 1018);
   for (const std::size_t i : {std::size_t{12}, std::size_t{21}}) {
     const DriveCloud c = runDriveCloud(plan, i);
     const PipelineResult& r = c.result;

@@ -252,7 +252,7 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
     startDoorwayTask({std::make_shared<const segmentation::WallPlane>(wall), found[wi], &pts, floor_z, top_z, viewpoint,
                       &p, organized, organized ? &view : nullptr, &doorway_error});
   };
-  const std::vector<segmentation::WallPlane> walls = segmentation::findWalls(
+  std::vector<segmentation::WallPlane> walls = segmentation::findWalls(
       pts, normals, floor_z, top_z, fc.ceiling.has_value(), viewpoint.head<2>().cast<double>(), p, &view, onWall);
   doorway_error.rethrow();
   std::vector<std::vector<recognition::Doorway>> doorways(walls.size());
@@ -261,6 +261,24 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
                        ? std::move(*found[wi])
                        : recognition::findDoorways(pts, walls[wi], floor_z, top_z, viewpoint, p, organized,
                                                    organized ? &view : nullptr);
+  {
+    // The fronts of furniture against a wall are no walls, nor the gaps between them doorways.
+    const std::vector<char> front = segmentation::furnitureFronts(walls, viewpoint.head<2>().cast<double>());
+    std::size_t kept = 0;
+    for (std::size_t wi = 0; wi < walls.size(); ++wi) {
+      if (front[wi]) {
+        char buf[120];
+        std::snprintf(buf, sizeof buf, "wall at (%.2f, %.2f): the front of furniture against a wall", walls[wi].point.x(),
+                      walls[wi].point.y());
+        res.trace.push_back(buf);
+        continue;
+      }
+      if (kept != wi) walls[kept] = std::move(walls[wi]), doorways[kept] = std::move(doorways[wi]);
+      ++kept;
+    }
+    walls.resize(kept);
+    doorways.resize(kept);
+  }
   watch.mark("walls");
   for (std::size_t wi = 0; wi < walls.size(); ++wi) {
     char buf[200];

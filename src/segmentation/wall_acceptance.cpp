@@ -260,5 +260,36 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
   }
 }
 
+// Depths of furniture against a wall (furnitureFronts): its front's middle
+// this far in front of the wall (closer, the shadow rule of addWallSegments
+// already takes it for trim or a recessed leaf), its ends no farther than
+// kFurnitureEnd (two cupboards of different depths joined into one line).
+constexpr double kFurnitureNear = 0.25, kFurnitureFar = 0.8, kFurnitureEnd = 0.95;
+// At least this share of its length along the wall's visible part.
+constexpr double kFurnitureOverlap = 0.5;
+
+std::vector<char> furnitureFronts(const std::vector<WallPlane>& walls, const Eigen::Vector2d& viewpoint) {
+  std::vector<char> front(walls.size(), 0);
+  for (std::size_t i = 0; i < walls.size(); ++i) {
+    const WallPlane& w = walls[i];
+    const Eigen::Vector2d a = w.point + w.s_min * w.direction, b = w.point + w.s_max * w.direction;
+    for (std::size_t j = 0; j < walls.size() && !front[i]; ++j) {
+      const WallPlane& o = walls[j];
+      if (j == i || std::abs(o.normal.dot(w.normal)) < kNearParallel) continue;
+      if (o.s_max - o.s_min <= w.s_max - w.s_min) continue;  // only in front of a longer wall
+      const double da = (a - o.point).dot(o.normal), db = (b - o.point).dot(o.normal);
+      const double mid = 0.5 * (da + db), seen = (viewpoint - o.point).dot(o.normal);
+      if (mid < kFurnitureNear || mid > kFurnitureFar || std::min(da, db) <= 0 ||
+          std::max(da, db) > kFurnitureEnd || seen <= std::max(da, db))
+        continue;
+      const double sa = (a - o.point).dot(o.direction), sb = (b - o.point).dot(o.direction);
+      // Most of it along the wall (which the furniture itself hides where it ends a wall's visible part).
+      const double overlap = std::min(std::max(sa, sb), o.s_max) - std::max(std::min(sa, sb), o.s_min);
+      front[i] = overlap >= kFurnitureOverlap * std::abs(sb - sa);
+    }
+  }
+  return front;
+}
+
 }  // namespace segmentation
 }  // namespace dsr
