@@ -62,15 +62,18 @@ TEST(DriveEval, ChangesOutsideTheDriveAreRefused) {
   EXPECT_THROW(evaluateDrive(1002, o), std::invalid_argument);
 }
 
-// DriveTracker's confirmation (drive_tracker.hpp): on these drives the
-// pipeline finds a door where there is none in a single cloud (1010: two,
-// 1018: one); published only once a second cloud shows it, none reaches the
-// last tracked_doors, and every passed door still does.
+// DriveTracker's confirmation (drive_tracker.hpp): on drive 1010 the
+// pipeline finds doors where there are none in single clouds (two);
+// published only once a second cloud shows it, none reaches the last
+// tracked_doors, and every passed door still does. (Drive 1018's, the gap
+// between two cupboards, is no longer found in any cloud:
+// segmentation::furnitureFronts; it is kept for the doors it passes.)
 TEST(DriveEval, ADoorSeenInOneCloudOnlyIsNotPublished) {
   for (const std::uint64_t seed : {1010u, 1018u}) {
     const DriveEvalResult r = evaluateDrive(seed, DriveEvalOptions());
     EXPECT_EQ(r.false_doors, 0) << "seed " << seed << "\n" << describe(r);
-    EXPECT_GE(r.unconfirmed, 1) << "seed " << seed << ": no single-cloud door withheld\n" << describe(r);
+    if (seed == 1010)
+      EXPECT_GE(r.unconfirmed, 1) << "seed " << seed << ": no single-cloud door withheld\n" << describe(r);
     for (const auto& d : r.doors)
       if (d.passed) EXPECT_TRUE(d.right) << "seed " << seed << " door " << d.door << ": " << d.why;
   }
