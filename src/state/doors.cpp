@@ -43,11 +43,6 @@ constexpr double kBeyondMin = 0.05, kBeyondMax = 20.0;
 constexpr std::size_t kBeyondMinPoints = 30;
 // A wall whose inliers are more than this share another door's leaf is that leaf.
 constexpr double kLeafWallShare = 0.3;
-// m: a doorway is an opening in its wall, the wall's face on both sides or
-// at least as far as its jambs; one reaching this far past the wall's last
-// point is not in that wall (past the corner of a cupboard's side, the
-// side taken for a wall, its front for a leaf at 90 deg: lidar64 1033).
-constexpr double kPastWallEnd = 0.15;
 
 // f(0) ... f(n - 1) over the cores (OpenMP), each at most once; the first
 // exception thrown is rethrown here (none may escape an OpenMP region).
@@ -376,7 +371,6 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       std::size_t on_leaf = 0;
       for (int i : wall.inliers) on_leaf += out.is_leaf[i];
       const bool own_wall = on_leaf <= kLeafWallShare * wall.inliers.size();
-      const bool in_wall = std::max(d.s1 - wall.s_max, wall.s_min - d.s0) <= kPastWallEnd;
       {
         char buf[512];
         std::snprintf(buf, sizeof buf,
@@ -390,11 +384,10 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
                       : !free_foot ? "rejected: foot hidden by something right in front"
                       : !clear_way ? "rejected: something stands before it across its width (furniture)"
                       : !tall ? "rejected: too low" : !wide ? "rejected: width"
-                      : !own_wall ? "rejected: its wall is another door's leaf"
-                      : !in_wall ? "rejected: past its wall's end" : "door");
+                      : !own_wall ? "rejected: its wall is another door's leaf" : "door");
         out.trace.push_back(buf);
       }
-      if (!evidence || !free_foot || !clear_way || !tall || !wide || !own_wall || !in_wall) continue;
+      if (!evidence || !free_foot || !clear_way || !tall || !wide || !own_wall) continue;
 
       DoorResult door;
       door.wall_id = static_cast<int>(wi);
