@@ -43,6 +43,29 @@ constexpr double kBeyondMin = 0.05, kBeyondMax = 20.0;
 constexpr std::size_t kBeyondMinPoints = 30;
 // A wall whose inliers are more than this share another door's leaf is that leaf.
 constexpr double kLeafWallShare = 0.3;
+// m: a doorway is an opening in its wall, the wall's face on both sides or
+// at least as far as its jambs; one reaching this far past the wall's last
+// point is not in that wall (past the corner of a cupboard's side, the
+// side taken for a wall, its front for a leaf at 90 deg: lidar64 1033).
+constexpr double kPastWallEnd = 0.15;
+// Where past such a doorway (m beyond it, m above the floor) its wall's
+// plane must have been seen for that.
+constexpr double kPastWallLook = 0.1, kPastWallLookZ = 1.0;
+// Something stands between `from` and `x` (m): a point within kRayReach of
+// the segment, more than kRayShort short of x (not the wall's own face).
+constexpr float kRayReach = 0.05f, kRayShort = 0.15f;
+bool hiddenFrom(const segmentation::Points& pts, const Eigen::Vector3f& from, const Eigen::Vector3f& x) {
+  const Eigen::Vector3f d = x - from;
+  const float len = d.norm();
+  if (!(len > kRayShort)) return false;
+  const Eigen::Vector3f u = d / len;
+  for (const Eigen::Vector3f& q : pts) {
+    const float t = (q - from).dot(u);
+    if (t <= 0.05f || t >= len - kRayShort) continue;
+    if ((q - from - t * u).squaredNorm() < kRayReach * kRayReach) return true;
+  }
+  return false;
+}
 
 // f(0) ... f(n - 1) over the cores (OpenMP), each at most once; the first
 // exception thrown is rethrown here (none may escape an OpenMP region).
@@ -371,6 +394,16 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       std::size_t on_leaf = 0;
       for (int i : wall.inliers) on_leaf += out.is_leaf[i];
       const bool own_wall = on_leaf <= kLeafWallShare * wall.inliers.size();
+      // (Unless the wall's plane just past the doorway there was not seen:
+      // out of a camera's view, or hidden from the viewpoint, as by a leaf
+      // swung towards it: the wall may go on there.)
+      auto pastEnd = [&](double past, double s_out) {
+        if (past <= kPastWallEnd) return false;
+        const Eigen::Vector2d xy = wall.point + s_out * wall.direction;
+        const Eigen::Vector3f x(static_cast<float>(xy.x()), static_cast<float>(xy.y()), static_cast<float>(floor_z + kPastWallLookZ));
+        return (!view || view->inView(x)) && !hiddenFrom(pts, viewpoint, x);
+      };
+      const bool in_wall = !pastEnd(d.s1 - wall.s_max, d.s1 + kPastWallLook) && !pastEnd(wall.s_min - d.s0, d.s0 - kPastWallLook);
       {
         char buf[512];
         std::snprintf(buf, sizeof buf,
@@ -384,10 +417,11 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
                       : !free_foot ? "rejected: foot hidden by something right in front"
                       : !clear_way ? "rejected: something stands before it across its width (furniture)"
                       : !tall ? "rejected: too low" : !wide ? "rejected: width"
-                      : !own_wall ? "rejected: its wall is another door's leaf" : "door");
+                      : !own_wall ? "rejected: its wall is another door's leaf"
+                      : !in_wall ? "rejected: past its wall's end" : "door");
         out.trace.push_back(buf);
       }
-      if (!evidence || !free_foot || !clear_way || !tall || !wide || !own_wall) continue;
+      if (!evidence || !free_foot || !clear_way || !tall || !wide || !own_wall || !in_wall) continue;
 
       DoorResult door;
       door.wall_id = static_cast<int>(wi);
