@@ -394,9 +394,10 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       std::size_t on_leaf = 0;
       for (int i : wall.inliers) on_leaf += out.is_leaf[i];
       const bool own_wall = on_leaf <= kLeafWallShare * wall.inliers.size();
-      // (Unless the wall's plane just past the doorway there was not seen:
-      // out of a camera's view, or hidden from the viewpoint, as by a leaf
-      // swung towards it: the wall may go on there.)
+      // A doorway reaching kPastWallEnd past its wall's end is not in it,
+      // unless the wall's plane just past the doorway was not seen (out of
+      // a camera's view, or hidden, as by a leaf swung towards the sensor):
+      // the wall may go on there.
       auto pastEnd = [&](double past, double s_out) {
         if (past <= kPastWallEnd) return false;
         const Eigen::Vector2d xy = wall.point + s_out * wall.direction;

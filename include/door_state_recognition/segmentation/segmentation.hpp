@@ -109,8 +109,9 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
 // Furniture standing against a wall, not walls: of `walls` (normals towards
 // `viewpoint`), each that stands parallel in front of a longer wall, between
 // it and the viewpoint, at a cupboard's or bookcase's depth (0.25-0.8 m: no
-// room or corridor is that narrow), within that wall's length. Such a
-// "wall" is the fronts of cupboards, a gap between two of them its "doorway".
+// room or corridor is that narrow), half its length or more along that
+// wall's visible part. Such a "wall" is the fronts of cupboards, a gap
+// between two of them its "doorway".
 std::vector<char> furnitureFronts(const std::vector<WallPlane>& walls, const Eigen::Vector2d& viewpoint);
 
 // Region growing (paper 3.1, [22]) over the points where mask != 0: a region
