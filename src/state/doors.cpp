@@ -404,7 +404,9 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
         const Eigen::Vector3f x(static_cast<float>(xy.x()), static_cast<float>(xy.y()), static_cast<float>(floor_z + kPastWallLookZ));
         return (!view || view->inView(x)) && !hiddenFrom(pts, viewpoint, x);
       };
-      const bool in_wall = !pastEnd(d.s1 - wall.s_max, d.s1 + kPastWallLook) && !pastEnd(wall.s_min - d.s0, d.s0 - kPastWallLook);
+      // (Only for a doorway no other rule turned down: a pass over the points.)
+      const bool in_wall = !(evidence && free_foot && clear_way && tall && wide && own_wall) ||
+                           (!pastEnd(d.s1 - wall.s_max, d.s1 + kPastWallLook) && !pastEnd(wall.s_min - d.s0, d.s0 - kPastWallLook));
       {
         char buf[512];
         std::snprintf(buf, sizeof buf,
