@@ -201,6 +201,18 @@ TEST(Sight, NoDoorwayLiesPastItsWallsEnd) {
   EXPECT_EQ(found, 3) << "drive 1033 frame 102: its three doors" << doors(c.result);
 }
 
+// Two doorways 0.9 m apart on one wall, their heads out of a 16-beam
+// LiDAR's view: the right trim leg of the one and the left of the other,
+// paired across the wall between them, made that wall a closed door. Each
+// leg has its own opening just beyond it: it is that doorway's casing and
+// pairs with no other (recognition/doorway_trim.cpp). Cloud 18 of lidar16
+// drive 1023 (in map, as the nodelet runs it): the two true doors only.
+TEST(Sight, TheTrimsOfTwoNeighbouringDoorwaysMakeNoDoorBetweenThem) {
+  const DriveCloud c = runDriveCloud(plannedDrive("lidar16", 1023), 18);
+  const int found = doorsAtTrueDoors(c, "drive 1023 frame 18");
+  EXPECT_EQ(found, 2) << "drive 1023 frame 18: its two doors" << doors(c.result);
+}
+
 // A LiDAR's walls are fitted where its noise lies well inside the inlier
 // band: the refit passes past the third turn them by hundredths of a degree,
 // and such a turn (taken before, segmentation/wall_search.cpp) moved which

@@ -25,6 +25,15 @@ constexpr int kLegMinPoints = 10;
 // Face points a head of trim needs across its doorway to be told by their
 // mean offset (in a camera frame; half as many on each side beside it).
 constexpr int kHeadMeanMinPoints = 60;
+// A column of the grid is an opening's when this share of its seen body
+// cells (kOpenMinCells at least) or more is seen through (rays past the
+// wall's plane, a reveal behind it, or none back inside a camera's view),
+// not its face; a leaf
+// swung towards the sensor, hiding the wall beside its doorway, is no
+// opening (rgbd-structured-robot 1026: a closed door beside it). Sought
+// within kOpenBeyondColumns (4 cm each) beyond a trim leg.
+constexpr double kOpenThrough = 0.6;
+constexpr int kOpenMinCells = 4, kOpenBeyondColumns = 2;
 
 void DoorwaySearch::findTrimLegs() {
   // The noise is the wall's quietest metre within kQuietReach of the column:
@@ -109,8 +118,45 @@ void DoorwaySearch::findTrimLegs() {
     }
     std::sort(legs.begin(), legs.end());
   }
+  // A leg with an opening just beyond its outer edge (one of the two
+  // columns there seen through) is that opening's casing and pairs with no
+  // leg on its other side: paired across the wall between two neighbouring
+  // doorways, the trims of both read as a closed door there (the head out
+  // of a rotating LiDAR's view: lidar16 drive 1023 cloud 18, lidar64 drive 1023).
+  auto seenThrough = [&](int c) {
+    int seen = 0, through = 0;
+    for (int r = body0; r < body1; ++r) {
+      const Cell& g = grid[static_cast<std::size_t>(r) * cols + c];
+      const bool open = !g.face && (g.through || g.recess || g.empty_in_view);
+      seen += g.face || g.through || g.front || g.recess || g.empty_in_view;
+      through += open;
+    }
+    return seen >= kOpenMinCells && through >= kOpenThrough * seen;
+  };
+  // The opening runs to the next leg beyond (or a narrowest door's width):
+  // a doorway's, unless the rows above it show plain wall (a door's head
+  // has trim or lies out of view; one 64-beam sweep of room 2008: the wall
+  // beside a closed door, seen at a grazing 9 deg, "seen through" below
+  // plain wall above).
+  auto openBeyond = [&](std::size_t i, bool right) {
+    const std::pair<int, int>& g = legs[i];
+    bool open = false;
+    for (int k = 1; k <= kOpenBeyondColumns && !open; ++k) {
+      const int c = right ? g.second / 2 + k : g.first / 2 - k;
+      open = c >= 0 && c < cols && seenThrough(c);
+    }
+    if (!open) return false;
+    const double edge = right ? subS(g.second + 1) : subS(g.first);
+    double far = right ? edge + p.door_min_width : edge - p.door_min_width;
+    if (right && i + 1 < legs.size() && subS(legs[i + 1].first) - edge <= p.door_max_width + 0.1)
+      far = subS(legs[i + 1].first);
+    if (!right && i > 0 && edge - subS(legs[i - 1].second + 1) <= p.door_max_width + 0.1)
+      far = subS(legs[i - 1].second + 1);
+    return headState(std::min(edge, far), std::max(edge, far)) != 0;
+  };
   for (std::size_t i = 0; i + 1 < legs.size(); ++i) {
     const double a = subS(legs[i].second + 1), b = subS(legs[i + 1].first);
+    if (openBeyond(i, false) || openBeyond(i + 1, true)) continue;
     // Without a view of the head, both legs must be clearly trim: two sub-columns wide.
     const int head = headState(a, b);
     const bool strong_legs = legs[i].second > legs[i].first && legs[i + 1].second > legs[i + 1].first;
