@@ -281,16 +281,18 @@ bool DoorwaySearch::buildGrid() {
   // Column shares over the body of a door.
   const int nbody = std::max(1, body1 - body0);
   face.assign(cols, 0.0), expl.assign(cols, 0.0), casing_share.assign(sub, 0.0);
+  col_seen.assign(cols, 0), col_through.assign(cols, 0);
   // Shares among the observed cells of a column: a camera may see nothing
   // at all through the upper part of a doorway (the room beyond out of range).
   for (int c = 0; c < cols; ++c) {
-    int f = 0, e = 0;
+    int f = 0, e = 0, t = 0;
     for (int r = body0; r < body1; ++r) {
       const Cell& g = grid[static_cast<std::size_t>(r) * cols + c];
       if (g.face) ++f;
-      else if (g.through || g.front || g.recess || g.empty_in_view) ++e;
+      else if (g.through || g.front || g.recess || g.empty_in_view) ++e, t += g.through || g.recess || g.empty_in_view;
     }
     const int observed = f + e;
+    col_seen[c] = observed, col_through[c] = t;
     const bool enough = observed >= std::max(4.0, 0.15 * nbody);
     face[c] = enough ? static_cast<double>(f) / observed : (f > 0 ? 1.0 : 0.0);
     expl[c] = enough ? static_cast<double>(e) / observed : 0.0;

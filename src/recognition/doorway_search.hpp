@@ -62,6 +62,10 @@ struct DoorwaySearch {
   std::vector<double> face_along;
   std::vector<std::pair<double, double>> behind_face;
   std::vector<double> face, expl, casing_share;
+  // Per column over the body rows: cells seen (face or explained), and of
+  // them seen through (no face; a ray past the plane, a reveal, or no return
+  // inside a camera's view).
+  std::vector<int> col_seen, col_through;
   double tolAt(double s) const;
   bool sampled(const Eigen::Vector3f& q, int c, int r) const;
   Eigen::Vector3f cellCentre(int c, int r) const;

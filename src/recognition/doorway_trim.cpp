@@ -123,16 +123,7 @@ void DoorwaySearch::findTrimLegs() {
   // leg on its other side: paired across the wall between two neighbouring
   // doorways, the trims of both read as a closed door there (the head out
   // of a rotating LiDAR's view: lidar16 drive 1023 cloud 18, lidar64 drive 1023).
-  auto seenThrough = [&](int c) {
-    int seen = 0, through = 0;
-    for (int r = body0; r < body1; ++r) {
-      const Cell& g = grid[static_cast<std::size_t>(r) * cols + c];
-      const bool open = !g.face && (g.through || g.recess || g.empty_in_view);
-      seen += g.face || g.through || g.front || g.recess || g.empty_in_view;
-      through += open;
-    }
-    return seen >= kOpenMinCells && through >= kOpenThrough * seen;
-  };
+  auto seenThrough = [&](int c) { return col_seen[c] >= kOpenMinCells && col_through[c] >= kOpenThrough * col_seen[c]; };
   // The opening runs to the next leg beyond (or a narrowest door's width):
   // a doorway's, unless the rows above it show plain wall (a door's head
   // has trim or lies out of view; one 64-beam sweep of room 2008: the wall
