@@ -28,10 +28,9 @@ constexpr int kHeadMeanMinPoints = 60;
 // A column of the grid is an opening's when this share of its seen body
 // cells (kOpenMinCells at least) or more is seen through (rays past the
 // wall's plane, a reveal behind it, or none back inside a camera's view),
-// not its face; a leaf
-// swung towards the sensor, hiding the wall beside its doorway, is no
-// opening (rgbd-structured-robot 1026: a closed door beside it). Sought
-// within kOpenBeyondColumns (4 cm each) beyond a trim leg.
+// not its face; a leaf swung towards the sensor, hiding the wall beside its
+// doorway, is no opening (rgbd-structured-robot 1026: a closed door beside
+// it). Sought within kOpenBeyondColumns (4 cm each) beyond a trim leg.
 constexpr double kOpenThrough = 0.6;
 constexpr int kOpenMinCells = 4, kOpenBeyondColumns = 2;
 
@@ -123,7 +122,9 @@ void DoorwaySearch::findTrimLegs() {
   // leg on its other side: paired across the wall between two neighbouring
   // doorways, the trims of both read as a closed door there (the head out
   // of a rotating LiDAR's view: lidar16 drive 1023 cloud 18, lidar64 drive 1023).
-  auto seenThrough = [&](int c) { return col_seen[c] >= kOpenMinCells && col_through[c] >= kOpenThrough * col_seen[c]; };
+  auto seenThrough = [&](int c) {
+    return col_seen[c] >= kOpenMinCells && col_through[c] >= kOpenThrough * col_seen[c];
+  };
   // The opening runs to the next leg beyond (or a narrowest door's width):
   // a doorway's, unless the rows above it show plain wall (a door's head
   // has trim or lies out of view; one 64-beam sweep of room 2008: the wall

@@ -404,8 +404,9 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
         const Eigen::Vector3f x(static_cast<float>(xy.x()), static_cast<float>(xy.y()), static_cast<float>(floor_z + kPastWallLookZ));
         return (!view || view->inView(x)) && !hiddenFrom(pts, viewpoint, x);
       };
+      const bool other_rules = evidence && free_foot && clear_way && tall && wide && own_wall;
       // (Only for a doorway no other rule turned down: a pass over the points.)
-      const bool in_wall = !(evidence && free_foot && clear_way && tall && wide && own_wall) ||
+      const bool in_wall = !other_rules ||
                            (!pastEnd(d.s1 - wall.s_max, d.s1 + kPastWallLook) && !pastEnd(wall.s_min - d.s0, d.s0 - kPastWallLook));
       {
         char buf[512];
@@ -424,7 +425,7 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
                       : !in_wall ? "rejected: past its wall's end" : "door");
         out.trace.push_back(buf);
       }
-      if (!evidence || !free_foot || !clear_way || !tall || !wide || !own_wall || !in_wall) continue;
+      if (!other_rules || !in_wall) continue;
 
       DoorResult door;
       door.wall_id = static_cast<int>(wi);
