@@ -59,6 +59,23 @@ ViewTop viewTop(const Points& points, const Eigen::Vector3f& viewpoint) {
   return v;
 }
 
+int ViewTop::binsWithin(float angle) const {
+  return angle > 0 ? static_cast<int>(angle / (2 * static_cast<float>(M_PI) / kViewTopBins)) : 0;
+}
+
+bool ViewTop::inViewNear(const Eigen::Vector3f& q, int bins, float slack) const {
+  if (max_tan.empty()) return true;
+  const int b = bin(q);
+  if (b < 0) return true;
+  const float t = tanElevation(q);
+  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+  for (int k = -bins; k <= bins; ++k) {
+    const int j = ((b + k) % kViewTopBins + kViewTopBins) % kViewTopBins;
+    lo = std::min(lo, min_tan[j]), hi = std::max(hi, max_tan[j]);
+  }
+  return t >= lo - slack && t <= hi + slack;
+}
+
 bool ViewTop::inView(const Eigen::Vector3f& q, float slack) const {
   if (max_tan.empty()) return true;
   const int b = bin(q);

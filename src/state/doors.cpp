@@ -41,6 +41,13 @@ constexpr double kRoomSlack = 0.1;
 // it, up to kBeyondMax; at least kBeyondMinPoints such points tell the depth.
 constexpr double kBeyondMin = 0.05, kBeyondMax = 20.0;
 constexpr std::size_t kBeyondMinPoints = 30;
+// A recess's back wall seen through a doorway (depthBeyond, seen_through
+// below): kRecessBackShare of the points seen through (the jambs' reveals,
+// within kRevealBand of the doorway's edges, left out) lie within
+// kRecessBackBand (m) of one depth at most kRecessBackMax (m) beyond
+// kMaxWallThickness behind the face, fewer than kRecessBackPast beyond it.
+constexpr double kRecessBackMax = 0.3, kRecessBackBand = 0.02, kRecessBackShare = 0.4, kRecessBackPast = 0.1;
+constexpr double kRevealBand = 0.04;
 // A wall whose inliers are more than this share another door's leaf is that leaf.
 constexpr double kLeafWallShare = 0.3;
 // m: a doorway is an opening in its wall, the wall's face on both sides or
@@ -51,6 +58,12 @@ constexpr double kPastWallEnd = 0.15;
 // Where past such a doorway (m beyond it, m above the floor) its wall's
 // plane must have been seen for that.
 constexpr double kPastWallLook = 0.1, kPastWallLookZ = 1.0;
+// Bearing bins either side where that look point counts as in view
+// (ViewTop::inViewNear), as many as the rays' spacing spans, at most
+// kPastWallLookBins: a 64-beam LiDAR's columns, 0.35 deg apart and thinned
+// by the voxel grid, leave some 0.25 deg bins without upper rings; a
+// camera's pixels fill every bin (its view's edges stay where they are).
+constexpr int kPastWallLookBins = 2;
 // Something stands between `from` and `x` (m): a point within kRayReach of
 // the segment, more than kRayShort short of x (not the wall's own face).
 constexpr float kRayReach = 0.05f, kRayShort = 0.15f;
@@ -196,12 +209,17 @@ bool mayBeOwnLeaf(const segmentation::Points& pts, const segmentation::WallPlane
 // How deep the space seen through a doorway is: the median distance behind
 // the wall's face (up to kBeyondMax) of the points whose sight lines from
 // the viewpoint cross the wall inside the doorway at body height; NaN when
-// fewer than kBeyondMinPoints do.
+// fewer than kBeyondMinPoints do. With `back`, also whether those points
+// end on a surface parallel to the wall: kRecessBackShare of them or more
+// within kRecessBackBand of one depth between kMaxWallThickness -
+// kRoomSlack and kMaxWallThickness + kRecessBackMax, fewer than
+// kRecessBackPast of them beyond it.
 double depthBeyond(const segmentation::Points& pts, const segmentation::WallPlane& wall, const recognition::Doorway& d,
-                   double floor_z, const Eigen::Vector3f& viewpoint) {
+                   double floor_z, const Eigen::Vector3f& viewpoint, bool* back = nullptr) {
   const double vs = wall.along(viewpoint), vd = wall.signedDistance(viewpoint), vz = viewpoint.z();
+  if (back) *back = false;
   if (vd <= 0.1) return std::numeric_limits<double>::quiet_NaN();
-  std::vector<double> depth;
+  std::vector<double> depth, inside;
   for (const auto& q : pts) {
     const double dd = wall.signedDistance(q);
     if (dd > -kBeyondMin || dd < -kBeyondMax) continue;
@@ -209,9 +227,24 @@ double depthBeyond(const segmentation::Points& pts, const segmentation::WallPlan
     const double s_wall = vs + t * (wall.along(q) - vs), z_wall = vz + t * (q.z() - vz) - floor_z;
     if (s_wall <= d.s0 + 0.05 || s_wall >= d.s1 - 0.05 || z_wall < 0.3 || z_wall > 1.75) continue;
     depth.push_back(-dd);
+    // (the jambs' reveals, square to the wall at the doorway's edges, are no back)
+    const double s_own = wall.along(q);
+    if (back && std::abs(s_own - d.s0) >= kRevealBand && std::abs(s_own - d.s1) >= kRevealBand) inside.push_back(-dd);
   }
   if (depth.size() < kBeyondMinPoints) return std::numeric_limits<double>::quiet_NaN();
   std::nth_element(depth.begin(), depth.begin() + depth.size() / 2, depth.end());
+  if (back && inside.size() >= kBeyondMinPoints) {
+    std::sort(inside.begin(), inside.end());
+    // The densest band kRecessBackBand either side of a depth: a sliding window over the sorted depths.
+    std::size_t best = 0, best_hi = 0;
+    for (std::size_t lo = 0, hi = 0; lo < inside.size(); ++lo) {
+      while (hi < inside.size() && inside[hi] - inside[lo] <= 2 * kRecessBackBand) ++hi;
+      const double mid = inside[lo] + kRecessBackBand;
+      if (hi - lo > best && mid > kMaxWallThickness - kRoomSlack && mid < kMaxWallThickness + kRecessBackMax)
+        best = hi - lo, best_hi = hi;
+    }
+    *back = best >= kRecessBackShare * inside.size() && inside.size() - best_hi < kRecessBackPast * inside.size();
+  }
   return depth[depth.size() / 2];
 }
 
@@ -367,7 +400,18 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       // Seen through only above 0.8 m (what is below hidden or solid) is a
       // window over a sill, or a gap over furniture: a doorway's opening runs
       // down to the floor, and the rays through it do too.
-      const bool seen_through = d.through >= 0.08 && d.low_through;
+      // What is seen through a doorway is the room beyond, not one flat
+      // surface parallel to the wall just behind its face: that is the back
+      // of a recess (the wall behind a gap between cupboards, whose sides
+      // are the "jambs": lidar64 drive 1049), deeper than any wall holding
+      // a door, too shallow for a room. Judged only where nothing else
+      // (trim, a closed leaf) speaks for a door.
+      bool seen_through = d.through >= 0.08 && d.low_through;
+      if (seen_through && !d.casing && !closed) {
+        bool back = false;
+        depthBeyond(pts, wall, d, floor_z, viewpoint, &back);
+        seen_through = !back;
+      }
       const bool evidence = d.shadow_end ? own_leaf_hides
                             : closed ? (d.casing || d.recess > 0.3 || set_back || band_evidence)
                                      : (d.casing || seen_through || own_leaf_hides);
@@ -402,12 +446,28 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
         if (past <= kPastWallEnd) return false;
         const Eigen::Vector2d xy = wall.point + s_out * wall.direction;
         const Eigen::Vector3f x(static_cast<float>(xy.x()), static_cast<float>(xy.y()), static_cast<float>(floor_z + kPastWallLookZ));
-        return (!view || view->inView(x)) && !hiddenFrom(pts, viewpoint, x);
+        return (!view || view->inViewNear(x, std::min(kPastWallLookBins, view->binsWithin(view->ray_spacing)))) &&
+               !hiddenFrom(pts, viewpoint, x);
       };
       const bool other_rules = evidence && free_foot && clear_way && tall && wide && own_wall;
       // (Only for a doorway no other rule turned down: a pass over the points.)
-      const bool in_wall = !other_rules ||
-                           (!pastEnd(d.s1 - wall.s_max, d.s1 + kPastWallLook) && !pastEnd(wall.s_min - d.s0, d.s0 - kPastWallLook));
+      // Without trim (which marks the jambs) the wall's ends are where its
+      // face is seen kPastWallLookZ above the floor or higher: a jamb is
+      // wall, not the side of a table, a box or a chair that lines up with a
+      // cupboard's side taken for a wall (lidar64 drive 1077: a table's side
+      // 1.1 m off the end of a wardrobe's side).
+      bool in_wall = true;
+      if (other_rules) {
+        double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+        if (!d.casing)
+          for (int i : wall.inliers)
+            if (pts[i].z() >= floor_z + kPastWallLookZ) {
+              const double a = wall.along(pts[i]);
+              lo = std::min(lo, a), hi = std::max(hi, a);
+            }
+        if (!(hi >= lo)) lo = wall.s_min, hi = wall.s_max;
+        in_wall = !pastEnd(d.s1 - hi, d.s1 + kPastWallLook) && !pastEnd(lo - d.s0, d.s0 - kPastWallLook);
+      }
       {
         char buf[512];
         std::snprintf(buf, sizeof buf,

@@ -76,6 +76,12 @@ struct ViewTop {
   // Within what the sensor saw: a bearing with returns, between the lowest
   // and highest seen on it (give or take `slack` in tan of elevation).
   bool inView(const Eigen::Vector3f& q, float slack = 0.02f) const;
+  // The same over the bearing bins `bins` either side: a LiDAR's columns
+  // (0.35 deg apart at 1024 a turn), thinned by the voxel grid, leave some
+  // bins without their upper rings.
+  bool inViewNear(const Eigen::Vector3f& q, int bins, float slack = 0.02f) const;
+  // How many whole bearing bins (about 0.25 deg each) `angle` (rad) spans.
+  int binsWithin(float angle) const;
 };
 ViewTop viewTop(const Points& points, const Eigen::Vector3f& viewpoint);
 
