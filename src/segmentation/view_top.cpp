@@ -76,13 +76,7 @@ bool ViewTop::inViewNear(const Eigen::Vector3f& q, int bins, float slack) const 
   return t >= lo - slack && t <= hi + slack;
 }
 
-bool ViewTop::inView(const Eigen::Vector3f& q, float slack) const {
-  if (max_tan.empty()) return true;
-  const int b = bin(q);
-  if (b < 0) return true;
-  const float t = tanElevation(q);
-  return t >= min_tan[b] - slack && t <= max_tan[b] + slack;
-}
+bool ViewTop::inView(const Eigen::Vector3f& q, float slack) const { return inViewNear(q, 0, slack); }
 
 }  // namespace segmentation
 }  // namespace dsr
