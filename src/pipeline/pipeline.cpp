@@ -59,6 +59,20 @@ bool sameLeaf(const DoorResult& a, const DoorResult& b) {
   return (a.hinge - b.hinge).norm() < 0.2 && std::abs(a.leaf_line_direction.dot(b.leaf_line_direction)) > 0.95;
 }
 
+bool leavesOverlap(const DoorResult& a, const DoorResult& b) {
+  constexpr double kParallelCos = 0.94, kOffLine = 0.15, kOverlapShare = 0.4;  // cos 20 deg
+  const Eigen::Vector3d &a0 = a.leaf_corners[0], &a1 = a.leaf_corners[1], &b0 = b.leaf_corners[0], &b1 = b.leaf_corners[1];
+  const double la = (a1 - a0).norm(), lb = (b1 - b0).norm();
+  if (!(la > 1e-6) || !(lb > 1e-6)) return false;  // also false for NaN
+  const Eigen::Vector3d ua = (a1 - a0) / la, ub = (b1 - b0) / lb;
+  if (std::abs(ua.dot(ub)) < kParallelCos) return false;
+  const Eigen::Vector3d m = 0.5 * (b0 + b1) - a0;
+  if ((m - m.dot(ua) * ua).norm() > kOffLine) return false;
+  const double t0 = (b0 - a0).dot(ua), t1 = (b1 - a0).dot(ua);
+  const double overlap = std::min(la, std::max(t0, t1)) - std::max(0.0, std::min(t0, t1));
+  return overlap >= kOverlapShare * std::min(la, lb);
+}
+
 bool surerReport(const DoorResult& a, const DoorResult& b) {
   if (a.angle_is_lower_bound != b.angle_is_lower_bound) return !a.angle_is_lower_bound;
   if (a.angle_is_lower_bound) return a.opening_angle_deg > b.opening_angle_deg;

@@ -517,16 +517,21 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       door.leaf_line_point = door.hinge;
       door.leaf_line_direction = toInput(Eigen::Vector3d(leaf.direction.x(), leaf.direction.y(), 0));
       door.casing = d.casing;
+      door.head_seen = std::isfinite(d.top);
       // The same doorway found from two overlapping wall hypotheses, or the
       // same leaf claimed by two doorways (a leaf's shadow beside its own
       // doorway looks like one): keep the surer one (surerReport, as
-      // runStations ranks them).
+      // runStations ranks them). Or one leaf claimed by doorways on two
+      // walls, hinged at its two ends (leavesOverlap): the doorway whose head
+      // was seen is in a wall, the other a gap onto a surface beyond.
       bool duplicate = false;
-      for (DoorResult& other : out.doors)
-        if ((other.opening_center - door.opening_center).norm() < 0.4 || sameLeaf(other, door)) {
-          duplicate = true;
-          if (surerReport(door, other)) other = door;
-        }
+      for (DoorResult& other : out.doors) {
+        const bool same = (other.opening_center - door.opening_center).norm() < 0.4 || sameLeaf(other, door);
+        if (!same && !leavesOverlap(other, door)) continue;
+        duplicate = true;
+        const bool take = !same && other.head_seen != door.head_seen ? door.head_seen : surerReport(door, other);
+        if (take) other = door;
+      }
       if (duplicate) continue;
       for (int i : leaf.inliers) out.is_leaf[i] = 1;
       out.doors.push_back(door);

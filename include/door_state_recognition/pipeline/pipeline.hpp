@@ -66,6 +66,10 @@ struct DoorResult {
   // wall's face at both jambs. What tells the door's own doorway from the
   // wall beside it when both claim one leaf (surerReport).
   bool casing = false;
+  // The wall's face was seen spanning the doorway above it (its head): what
+  // tells a doorway in a wall from a gap onto a far surface when both claim
+  // one leaf (leavesOverlap).
+  bool head_seen = false;
   // Fitted lines on the floor plane (the paper's 3.3.2), for display.
   Eigen::Vector3d wall_line_point, wall_line_direction, leaf_line_point, leaf_line_direction;
 };
@@ -86,6 +90,15 @@ double clearWidth(double width, double angle_deg, double leaf_thickness, double 
 // its hinge, which then looks like a doorway of its own holding the same
 // leaf at 180 deg less its angle.
 bool sameLeaf(const DoorResult& a, const DoorResult& b);
+// Two reports put their leaves in one place: on the floor, the two leaves'
+// lines (hinge to latch) parallel within 20 deg, the middle of one within
+// 0.15 m of the other's line, and the two overlapping along it by 40 % of
+// the shorter or more, whichever end each takes for its hinge. A leaf is a
+// solid slab: two doors cannot hold leaves there at once (two leaves of a
+// double door meet end to end, they do not overlap). One leaf claimed by a
+// doorway on each of two walls (the wall holding it and a wall beyond it,
+// hinged at opposite ends) is one door.
+bool leavesOverlap(const DoorResult& a, const DoorResult& b);
 // Of two reports of one door (or of one leaf), whether `a` is the one to
 // keep over `b`: a leaf measured over one only bounded; of two bounds the
 // larger (each is a true lower bound); where the two claim one leaf from
