@@ -29,6 +29,7 @@
 #include "door_state_recognition/io/report.hpp"
 #include "door_state_recognition/pipeline/pipeline.hpp"
 #include "door_state_recognition/sim/ground_truth.hpp"
+#include "door_state_recognition/sim/lidar.hpp"
 #include "door_state_recognition/sim/scene.hpp"
 #include "door_state_recognition/sim/sensors.hpp"
 #include "door_state_recognition/util/keep_freed_memory.hpp"
@@ -44,9 +45,11 @@ const char* kUsage = R"(usage: door_state_bench [options]
 Times our pipeline and the stock-PCL baseline (pcl::VoxelGrid,
 NormalEstimationOMP, iterative SACSegmentation, RegionGrowing,
 MomentOfInertiaEstimation, BoundaryEstimation) on the same simulated points:
-laser-scanner rooms of each --sizes and one 640x480 RGB-D frame, seed --seed,
-and the first --rgbd-door-frames RGB-D frames from seed 1000 on with a door in
-view (where the leaf search works). Per stage: median of --runs runs (over
+laser-scanner rooms of each --sizes (and the 400k room as two stations merged
+into one cloud), one 64-beam LiDAR sweep and one 640x480 RGB-D frame, seed
+--seed, and the first --rgbd-door-frames RGB-D frames from seed 1000 on with a
+door in view (where the leaf search works), at 640x480 and again at 320x240.
+Per stage: median of --runs runs (over
 every run of every frame for the frames with a door); peak RSS of each implementation in a child
 process of its own; door accuracy of both against the simulator's truth, on
 the timed scenes and on --accuracy-scenes more rooms of --accuracy-points,
@@ -57,6 +60,8 @@ options:
   --sizes LIST              laser rays per room, comma list (default 100000,400000,1000000,4000000)
   --seed N                  seed of every timed scene (default 7)
   --no-rgbd                 leave out the RGB-D frames
+  --no-robot                leave out a robot's clouds: one 64-beam LiDAR sweep (seed --seed) and the
+                            RGB-D frames with a door at 320x240 (issue 20's targets)
   --rgbd-door-frames K      RGB-D frames with a door in view timed together (default 5; 0: none)
   --skip-baseline-above N   no baseline on clouds of more than N points (default 4000000: none skipped)
   --baseline-runs R         repetitions of the baseline (default: --runs)
@@ -72,6 +77,7 @@ struct Options {
   std::vector<std::size_t> sizes = {100000, 400000, 1000000, 4000000};
   std::uint64_t seed = 7;
   bool rgbd = true;
+  bool robot = true;  // a 64-beam sweep and the door frames at 320x240
   int rgbd_door_frames = 5;
   std::size_t skip_baseline_above = 4000000;
   int accuracy_scenes = 30;
@@ -110,6 +116,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--baseline-runs") o.baseline_runs = static_cast<int>(toInt(a, value()));
     else if (a == "--seed") o.seed = static_cast<std::uint64_t>(toInt(a, value()));
     else if (a == "--no-rgbd") o.rgbd = false;
+    else if (a == "--no-robot") o.robot = false;
     else if (a == "--rgbd-door-frames") o.rgbd_door_frames = static_cast<int>(toInt(a, value()));
     else if (a == "--skip-baseline-above") o.skip_baseline_above = static_cast<std::size_t>(toInt(a, value()));
     else if (a == "--accuracy-scenes") o.accuracy_scenes = static_cast<int>(toInt(a, value()));
@@ -138,16 +145,21 @@ Options parse(int argc, char** argv) {
 // ------------------------------------------------------------------ scenes
 
 struct Case {
-  std::string sensor;  // tls | rgbd | merged (two laser stations in one cloud, run without a viewpoint)
-  std::size_t points;  // rays (tls) or pixels (rgbd)
+  // tls | rgbd | merged (two laser stations in one cloud, run without a
+  // viewpoint) | lidar64 (one sweep of a 64-beam LiDAR, 64 x 1024)
+  std::string sensor;
+  std::size_t points;  // rays (tls) or pixels (rgbd, lidar64)
   std::uint64_t seed;
   std::vector<std::uint64_t> more_seeds;  // further frames timed with it (the frames with a door)
   bool door_frames = false;               // the RGB-D frames with a door in view
+  int width = 640, height = 480;          // rgbd: the image (intrinsics scaled with it)
   std::string name() const {
     if (sensor == "tls") return "laser " + std::to_string(points / 1000) + "k";
     if (sensor == "merged") return "merged " + std::to_string(points / 1000) + "k";
-    if (!door_frames) return "RGB-D 640x480";
-    return "RGB-D door x" + std::to_string(more_seeds.size() + 1);
+    if (sensor == "lidar64") return "LiDAR 64-beam";
+    const std::string size = width == 640 && height == 480 ? "" : " " + std::to_string(width) + "x" + std::to_string(height);
+    if (!door_frames) return "RGB-D " + std::to_string(width) + "x" + std::to_string(height);
+    return "RGB-D door x" + std::to_string(more_seeds.size() + 1) + size;
   }
   std::vector<std::uint64_t> seeds() const {
     std::vector<std::uint64_t> all{seed};
@@ -173,9 +185,14 @@ Scene simulate(const Case& c) {
     o.seed = c.seed;
     o.viewpoints = c.sensor == "merged" ? 2 : 1;
     sc = sim::scanTls(scene, o);
+  } else if (c.sensor == "lidar64") {
+    sim::LidarOptions o = sim::LidarOptions::preset(64);
+    o.seed = c.seed;
+    sc = sim::scanLidar(scene, o);
   } else {
     sim::RgbdOptions o;
     o.seed = c.seed;
+    if (c.width != o.width || c.height != o.height) o.resize(c.width, c.height);
     sc = sim::captureRgbd(scene, o);
   }
   s.sim_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -425,6 +442,8 @@ int main(int argc, char** argv) {
   // The 400k room again as two stations merged into one cloud (issue 19: within 1.5x of the single scan).
   if (std::find(opt.sizes.begin(), opt.sizes.end(), 400000u) != opt.sizes.end())
     cases.push_back({"merged", 400000, opt.seed, {}, false});
+  // A robot's LiDAR: one 64-beam sweep of the same room (issue 20: <= 30 ms).
+  if (opt.robot) cases.push_back({"lidar64", 64 * 1024, opt.seed, {}, false});
   if (opt.rgbd) cases.push_back({"rgbd", 640 * 480, opt.seed, {}, false});
   if (opt.rgbd && opt.rgbd_door_frames > 0) {
     // The first frames from seed 1000 on (the accuracy sweep's) with a door
@@ -446,6 +465,9 @@ int main(int argc, char** argv) {
     if (found.contains("seeds"))
       for (const auto& v : found["seeds"]) seeds.push_back(v.get<std::uint64_t>());
     if (!seeds.empty()) cases.push_back({"rgbd", 640 * 480, seeds.front(), {seeds.begin() + 1, seeds.end()}, true});
+    // The same frames at 320x240, as a robot's camera streams them (issue 20: <= 10 ms; issue 21: <= 8 ms).
+    if (!seeds.empty() && opt.robot)
+      cases.push_back({"rgbd", 320 * 240, seeds.front(), {seeds.begin() + 1, seeds.end()}, true, 320, 240});
   }
 
   json machine = {{"cpus", sysconf(_SC_NPROCESSORS_ONLN)},
@@ -555,7 +577,7 @@ int main(int argc, char** argv) {
 
   // Summary and the n log n curve over the laser sizes.
   std::printf("\n== summary (total ms, median) ==\n");
-  std::printf("%-15s %10s %10s %11s %9s %16s %14s %14s\n", "case", "ours", "stock", "ours/stock", "speed-up",
+  std::printf("%-22s %10s %10s %11s %9s %16s %14s %14s\n", "case", "ours", "stock", "ours/stock", "speed-up",
               "w/o doors: s-up", "ours mem/in", "stock mem/in");
   json curve = json::array();
   double ref_ours = 0, ref_stock = 0;
@@ -569,7 +591,7 @@ int main(int argc, char** argv) {
     const double mb = hs ? r["stock"]["peak_extra_kb"].get<double>() / in_kb : std::nan("");
     const double ad = a - r["ours"]["stage_median_ms"].value("doors", 0.0);
     const double bd = hs ? b - r["stock"]["stage_median_ms"].value("doors", 0.0) : std::nan("");
-    std::printf("%-15s %10.1f %10s %11s %9s %16s %14s %14s\n", r["case"].get<std::string>().c_str(), a, fmt("%.1f", b).c_str(),
+    std::printf("%-22s %10.1f %10s %11s %9s %16s %14s %14s\n", r["case"].get<std::string>().c_str(), a, fmt("%.1f", b).c_str(),
                 fmt("%.3f", a / b).c_str(), fmt("%.1fx", b / a).c_str(), fmt("%.1fx", bd / ad).c_str(),
                 fmt("%.2fx", ma).c_str(), fmt("%.2fx", mb).c_str());
     if (r["sensor"] == "tls") {

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # make bench: our pipeline against the stock-PCL baseline (issue 5) on
 # simulated scenes the bench generates itself with fixed seeds: laser rooms
-# of 100k, 400k, 1M and 4M rays, one 640x480 RGB-D frame and the first five
-# RGB-D frames from seed 1000 on with a door in view. Per stage the
+# of 100k, 400k, 1M and 4M rays (400k also as two stations merged), one
+# 64-beam LiDAR sweep, one 640x480 RGB-D frame and the first five RGB-D
+# frames from seed 1000 on with a door in view, at 640x480 and 320x240. Per stage the
 # median of BENCH_RUNS runs (default 5), peak memory of each implementation
 # in a child process of its own, door accuracy of both against the truth, the
 # ratio ours/stock and the cost against n log n. Prints the tables and writes

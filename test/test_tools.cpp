@@ -81,7 +81,7 @@ TEST(Tools, ToolsRunWithAShortOpenMpSpinUnlessTheEnvironmentSaysOtherwise) {
   const fs::path dir = tempDir("spin");
   auto header = [&](const std::string& env) {
     const std::string cmd = "env -u GOMP_SPINCOUNT -u OMP_WAIT_POLICY " + env + " " + DSR_BIN_DIR +
-                            "/door_state_bench --no-rgbd --sizes '' --runs 1 --accuracy-scenes 0 --json " +
+                            "/door_state_bench --no-rgbd --no-robot --sizes '' --runs 1 --accuracy-scenes 0 --json " +
                             (dir / "b.json").string() + " 2>/dev/null";
     FILE* p = popen(cmd.c_str(), "r");
     std::string out;
