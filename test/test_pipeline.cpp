@@ -84,6 +84,16 @@ Scored runRobotFrame(std::uint64_t seed, sim::DepthModel model, bool clutter) {
   return runAndScore(scene, sim::captureRgbd(scene, o), p);
 }
 
+// One robot camera frame of a test, and its name for the failure message.
+struct RobotFrame {
+  std::uint64_t seed;
+  sim::DepthModel model;
+  bool clutter;
+};
+std::string frameName(const RobotFrame& f) {
+  return "seed=" + std::to_string(f.seed) + " model=" + sim::toString(f.model) + " clutter=" + (f.clutter ? "1" : "0");
+}
+
 std::string describe(const Scored& s) {
   std::ostringstream os;
   os << "truth:";
@@ -1019,14 +1029,9 @@ TEST(DoorState, AWallJoinedFromScatteredPiecesIsNoWall) {
   // A wall is one continuous surface:
   // of what it shows (not hidden by what stands in front) at least half
   // holds points. The true door is found and nothing else.
-  struct Frame {
-    std::uint64_t seed;
-    sim::DepthModel model;
-    bool clutter;
-  };
-  for (const Frame f : {Frame{1012, sim::DepthModel::StructuredLight, false},
-                        Frame{1010, sim::DepthModel::StructuredLight, true}}) {
-    SCOPED_TRACE(::testing::Message() << "seed=" << f.seed << " model=" << sim::toString(f.model) << " clutter=" << f.clutter);
+  for (const RobotFrame f : {RobotFrame{1012, sim::DepthModel::StructuredLight, false},
+                             RobotFrame{1010, sim::DepthModel::StructuredLight, true}}) {
+    SCOPED_TRACE(frameName(f));
     const Scored s = runRobotFrame(f.seed, f.model, f.clutter);
     const eval::EvalResult& e = s.eval;
     EXPECT_EQ(e.matched, 1) << trace(s);
@@ -1058,14 +1063,9 @@ TEST(DoorState, OneLeafClaimedFromTwoWallsIsOneDoor) {
   // leaves lying in one place are one door (leavesOverlap), and the doorway
   // whose head was seen in its wall keeps it. Each frame: its one door in
   // the right state, nothing else.
-  struct Frame {
-    std::uint64_t seed;
-    sim::DepthModel model;
-    bool clutter;
-  };
-  for (const Frame f : {Frame{1024, sim::DepthModel::ActiveStereo, false},
-                        Frame{1010, sim::DepthModel::Default, true}}) {
-    SCOPED_TRACE(::testing::Message() << "seed=" << f.seed << " model=" << sim::toString(f.model) << " clutter=" << f.clutter);
+  for (const RobotFrame f : {RobotFrame{1024, sim::DepthModel::ActiveStereo, false},
+                             RobotFrame{1010, sim::DepthModel::Default, true}}) {
+    SCOPED_TRACE(frameName(f));
     const Scored s = runRobotFrame(f.seed, f.model, f.clutter);
     EXPECT_EQ(s.eval.matched, 1) << describe(s) << trace(s);
     EXPECT_EQ(s.eval.reported_doors, 1) << describe(s) << trace(s);
