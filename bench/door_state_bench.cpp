@@ -157,9 +157,9 @@ struct Case {
     if (sensor == "tls") return "laser " + std::to_string(points / 1000) + "k";
     if (sensor == "merged") return "merged " + std::to_string(points / 1000) + "k";
     if (sensor == "lidar64") return "LiDAR 64-beam";
-    const std::string size = width == 640 && height == 480 ? "" : " " + std::to_string(width) + "x" + std::to_string(height);
-    if (!door_frames) return "RGB-D " + std::to_string(width) + "x" + std::to_string(height);
-    return "RGB-D door x" + std::to_string(more_seeds.size() + 1) + size;
+    const std::string size = std::to_string(width) + "x" + std::to_string(height);
+    if (!door_frames) return "RGB-D " + size;
+    return "RGB-D door x" + std::to_string(more_seeds.size() + 1) + (width == 640 && height == 480 ? "" : " " + size);
   }
   std::vector<std::uint64_t> seeds() const {
     std::vector<std::uint64_t> all{seed};

@@ -20,8 +20,8 @@ std::optional<Pinhole> fitPinhole(const pcl::PointCloud<pcl::PointXYZ>& cloud, c
   // eigenvector of the smallest eigenvalue of A^T A.
   std::vector<std::pair<Eigen::Vector2d, Eigen::Vector3d>> sample;
   // About 60 samples across the image's short side, and no more than about
-  // 5000 in all (a 64-beam LiDAR's 64 x 1024 rings, no pinhole camera, were
-  // each taken: 65k outer products to reject it).
+  // 5000 in all: a 64-beam LiDAR's 64 x 1024 sweep, no pinhole camera, had
+  // every one of its 65k pixels taken to reject it.
   const int grid = std::max({1, std::min(w, h) / 60, static_cast<int>(std::ceil(std::sqrt(w * static_cast<double>(h) / 5000.0)))});
   for (int r = 0; r < h; r += grid)
     for (int c = 0; c < w; c += grid) {
