@@ -186,6 +186,32 @@ TEST(DoorFusion, IdsAreStableOnePerDoorOverADrive) {
   EXPECT_EQ(g.tracks()[0].observations, 6u);
 }
 
+TEST(DoorFusion, TwoTracksJoinedKeepTheEstimateMostCloudsAgreedOn) {
+  // RGB-D drive 1016: a closed door shown by 19 clouds; one stray report
+  // 0.54 m along the wall (semi-open 6 deg, a doorway misplaced) starts a
+  // second track, a later report between the two joins it (nearest first),
+  // and the two tracks, now within match_distance_m, are joined. The door
+  // stands where 19 clouds put it: the joined track keeps that estimate.
+  DoorFusion f;
+  for (int k = 0; k < 19; ++k) f.update({door(kA, 0.1, false, 0.94)}, 1.0 + k);
+  f.update({door(kA + Eigen::Vector3d(0.54, 0, 0), 6, false, 0.7)}, 30.0);
+  ASSERT_EQ(f.tracks().size(), 2u);
+  f.update({door(kA + Eigen::Vector3d(0.35, 0, 0), 2, false, 0.6)}, 31.0);
+  ASSERT_EQ(f.tracks().size(), 1u);
+  EXPECT_EQ(f.tracks()[0].observations, 21u);
+  EXPECT_EQ(f.tracks()[0].door.state, DoorStateKind::Closed);
+  EXPECT_LT((f.tracks()[0].door.opening_center - kA).norm(), 0.05);
+  // Estimates that depart by more than state_change_deg: the door moved
+  // since, and the one seen last holds, whatever the counts.
+  DoorFusion g;
+  for (int k = 0; k < 19; ++k) g.update({door(kA, 0.1, false, 0.94)}, 1.0 + k);
+  g.update({door(kA + Eigen::Vector3d(0.54, 0, 0), 60, false, 0.7)}, 30.0);
+  g.update({door(kA + Eigen::Vector3d(0.35, 0, 0), 60, false, 0.6)}, 31.0);
+  ASSERT_EQ(g.tracks().size(), 1u);
+  EXPECT_EQ(g.tracks()[0].door.state, DoorStateKind::SemiOpen);
+  EXPECT_NEAR(g.tracks()[0].door.opening_angle_deg, 60, 1e-9);
+}
+
 TEST(DoorFusion, TwoDoorsSeenInOneCloudAreNeverOne) {
   DoorFusion f;
   // Two doors 0.45 m apart in one cloud (a double door): two tracks.

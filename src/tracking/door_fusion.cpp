@@ -217,9 +217,12 @@ DoorFusion::Update DoorFusion::update(const std::vector<DoorResult>& doors, doub
 }
 
 // Two tracks of one door (near along one wall, not both in this cloud):
-// joined into the older, whose estimate becomes the better of the two
-// (a measured leaf before a bound; of two measured the one seen last; of
-// two bounds the larger).
+// joined into the older, whose estimate becomes the better of the two: a
+// measured leaf before a bound; of two bounds the larger; of two measured
+// leaves that agree (within state_change_deg) the one shown by more clouds
+// (a door stands where most clouds put it: a track started by one stray
+// report off by a few decimetres does not move it), of two that depart the
+// one seen last (the door moved since).
 void DoorFusion::joinNear(const Eigen::Vector3d& up, Update& u) {
   for (std::size_t a = 0; a < tracks_.size(); ++a)
     for (std::size_t b = a + 1; b < tracks_.size();) {
@@ -231,9 +234,11 @@ void DoorFusion::joinNear(const Eigen::Vector3d& up, Update& u) {
         continue;
       }
       const DoorResult &ea = ta.door, &eb = tb.door;
+      const bool agree = std::abs(ea.opening_angle_deg - eb.opening_angle_deg) <= options_.state_change_deg;
       const bool b_better = ea.angle_is_lower_bound != eb.angle_is_lower_bound ? ea.angle_is_lower_bound
                             : ea.angle_is_lower_bound ? eb.opening_angle_deg > ea.opening_angle_deg
-                                                      : tb.last_seen > ta.last_seen;
+                            : agree && ta.observations != tb.observations ? tb.observations > ta.observations
+                                                                         : tb.last_seen > ta.last_seen;
       if (b_better) {
         ta.door = eb;
         ta.door.id = static_cast<int>(ta.id);

@@ -12,7 +12,9 @@
 // the object lives (not even after reset()). Two tracks that come to lie
 // within match_distance_m of each other along one wall (e.g. a door first
 // seen off by a few decimetres) are one door: joined, the older id kept,
-// unless both were seen in the same cloud (then they are two doors).
+// unless both were seen in the same cloud (then they are two doors); the
+// estimate kept is that of the track more clouds showed where the two
+// agree within state_change_deg, else that of the one seen last.
 //
 // The estimate of a track, per observation o (this cloud's door):
 //  - a measured leaf (o.angle_is_lower_bound false) beats a bound: a track
