@@ -437,6 +437,42 @@ TEST(Segmentation, FloorCeilingAndWallsOfASimulatedRoom) {
   }
 }
 
+// A level of "horizontal" points with wall below every one of them (a
+// rotating LiDAR's top ring on the walls, its normals turned upright) is no
+// ceiling; the same room under a ceiling over free space has one.
+TEST(Segmentation, ALevelWithWallBelowItIsNoCeiling) {
+  segmentation::Points pts;
+  segmentation::Normals normals;
+  auto add = [&](float x, float y, float z, const Eigen::Vector3f& n) {
+    pts.emplace_back(x, y, z);
+    normals.n.push_back(n);
+  };
+  const Eigen::Vector3f up = Eigen::Vector3f::UnitZ();
+  for (float x = -2.0f; x <= 2.0f; x += 0.05f)
+    for (float y = -2.0f; y <= 2.0f; y += 0.05f) add(x, y, 0.0f, up);  // the floor
+  // Four walls of a 4 m room, rings 0.2 m apart up to 1.9 m; the top ring's
+  // normals upright, the others' horizontal.
+  for (float z = 0.3f; z <= 1.91f; z += 0.2f)
+    for (float t = -2.0f; t <= 2.0f; t += 0.01f) {
+      const bool top = z > 1.85f;
+      add(t, -2.0f, z, top ? up : Eigen::Vector3f(0, 1, 0));
+      add(t, 2.0f, z, top ? up : Eigen::Vector3f(0, -1, 0));
+      add(-2.0f, t, z, top ? up : Eigen::Vector3f(1, 0, 0));
+      add(2.0f, t, z, top ? up : Eigen::Vector3f(-1, 0, 0));
+    }
+  Parameters p;
+  const segmentation::FloorCeiling rings = segmentation::findFloorCeiling(pts, normals, p, 1.0);
+  ASSERT_TRUE(rings.floor);
+  EXPECT_NEAR(*rings.floor, 0.0, 0.02);
+  EXPECT_FALSE(rings.ceiling) << "a ceiling at " << *rings.ceiling << " on the walls' top ring";
+  // The same with a ceiling at 2.5 m over the whole room.
+  for (float x = -1.95f; x <= 1.95f; x += 0.05f)
+    for (float y = -1.95f; y <= 1.95f; y += 0.05f) add(x, y, 2.5f, -up);
+  const segmentation::FloorCeiling room = segmentation::findFloorCeiling(pts, normals, p, 1.0);
+  ASSERT_TRUE(room.floor && room.ceiling);
+  EXPECT_NEAR(*room.ceiling, 2.5, 0.02);
+}
+
 // ----------------------------------------------------------------- door states
 
 // The match of truth door `door` in a scored scene, or null when it was missed.

@@ -42,7 +42,9 @@ struct FloorCeiling {
 // apart). A single peak is the floor when it lies below the viewpoint.
 // A level that walls rise well above (more than 2% of the vertical points
 // 0.3 m or more higher) is no ceiling: a desk or cupboard top, a shelf's
-// underside, seen by a sensor that does not see the ceiling.
+// underside, seen by a sensor that does not see the ceiling. Nor is one
+// most of whose points have other points 8-60 cm straight below them: a
+// LiDAR's top ring on the walls, not a ceiling over free space.
 FloorCeiling findFloorCeiling(const Points& points, const Normals& normals, const Parameters& p, double viewpoint_z);
 
 struct WallPlane {
