@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <unordered_set>
 #include <vector>
 
@@ -28,6 +29,51 @@ constexpr std::size_t kAboveCeilingPoints = 50;
 // true one, which no ring reaches in the room; walls were held to reach it).
 // A true ceiling's points over a wall's top or a cupboard are few of them.
 constexpr double kBelowCell = 0.05, kBelowFrom = 0.08, kBelowTo = 0.6, kBelowShare = 0.5;
+// Cells of the level's box marked in a grid at most (16 MB); more, in a hash.
+constexpr std::int64_t kMaxBelowCells = std::int64_t{1} << 24;
+
+namespace {
+
+// Whether most points of the level at z = hi (within `band`, with a
+// horizontal surface's normal) have a point kBelowFrom to kBelowTo lower in
+// their cell of kBelowCell across: marked in a grid over the level's
+// cells (a hash of the cells where that grid would be too large).
+bool wallBelowLevel(const Points& points, const Normals& normals, const Parameters& p, double hi, double band) {
+  std::vector<std::size_t> level;
+  float x0 = std::numeric_limits<float>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (std::abs(normals.n[i].z()) > p.horizontal_normal_z && std::abs(points[i].z() - hi) <= band) {
+      level.push_back(i);
+      x0 = std::min(x0, points[i].x()), x1 = std::max(x1, points[i].x());
+      y0 = std::min(y0, points[i].y()), y1 = std::max(y1, points[i].y());
+    }
+  if (level.empty()) return false;
+  auto cellOf = [](float v) { return static_cast<std::int64_t>(std::floor(static_cast<double>(v) / kBelowCell)); };
+  const std::int64_t cx0 = cellOf(x0), cy0 = cellOf(y0), nx = cellOf(x1) - cx0 + 1, ny = cellOf(y1) - cy0 + 1;
+  auto isBelow = [&](const Eigen::Vector3f& q) { return q.z() < hi - kBelowFrom && q.z() > hi - kBelowTo; };
+  std::size_t over = 0;
+  if (nx * ny <= kMaxBelowCells) {
+    std::vector<unsigned char> below(static_cast<std::size_t>(nx * ny), 0);
+    for (const auto& q : points)
+      if (isBelow(q)) {
+        const std::int64_t cx = cellOf(q.x()) - cx0, cy = cellOf(q.y()) - cy0;
+        if (cx >= 0 && cx < nx && cy >= 0 && cy < ny) below[static_cast<std::size_t>(cy * nx + cx)] = 1;
+      }
+    for (const std::size_t i : level)
+      over += below[static_cast<std::size_t>((cellOf(points[i].y()) - cy0) * nx + cellOf(points[i].x()) - cx0)];
+  } else {
+    auto key = [&](const Eigen::Vector3f& q) {
+      return static_cast<std::uint64_t>(cellOf(q.x())) * 0x9E3779B97F4A7C15ULL ^ static_cast<std::uint64_t>(cellOf(q.y()));
+    };
+    std::unordered_set<std::uint64_t> below;
+    for (const auto& q : points)
+      if (isBelow(q)) below.insert(key(q));
+    for (const std::size_t i : level) over += below.count(key(points[i])) > 0;
+  }
+  return over > kBelowShare * level.size();
+}
+
+}  // namespace
 
 FloorCeiling findFloorCeiling(const Points& points, const Normals& normals, const Parameters& p, double viewpoint_z) {
   FloorCeiling fc;
@@ -68,23 +114,7 @@ FloorCeiling findFloorCeiling(const Points& points, const Normals& normals, cons
       above += points[i].z() > hi + kAboveCeiling;
     }
   bool closes = above < std::max<std::size_t>(kAboveCeilingPoints, vertical / 50);
-  if (closes) {
-    auto cellKey = [](const Eigen::Vector3f& q) {
-      const auto cx = static_cast<std::int64_t>(std::floor(q.x() / kBelowCell));
-      const auto cy = static_cast<std::int64_t>(std::floor(q.y() / kBelowCell));
-      return static_cast<std::uint64_t>(cx) * 0x9E3779B97F4A7C15ULL ^ static_cast<std::uint64_t>(cy);
-    };
-    std::unordered_set<std::uint64_t> below;
-    for (const auto& q : points)
-      if (q.z() < hi - kBelowFrom && q.z() > hi - kBelowTo && q.allFinite()) below.insert(cellKey(q));
-    std::size_t level = 0, over = 0;
-    for (std::size_t i = 0; i < points.size(); ++i)
-      if (std::abs(normals.n[i].z()) > p.horizontal_normal_z && std::abs(points[i].z() - hi) <= 1.5 * bin) {
-        ++level;
-        over += below.count(cellKey(points[i])) > 0;
-      }
-    closes = !(over > kBelowShare * level);
-  }
+  if (closes) closes = !wallBelowLevel(points, normals, p, hi, 1.5 * bin);
   if (hi - lo >= p.min_room_height && closes) {
     fc.floor = lo;
     fc.ceiling = hi;
