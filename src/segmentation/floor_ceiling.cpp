@@ -34,15 +34,16 @@ constexpr std::int64_t kMaxBelowCells = std::int64_t{1} << 24;
 
 namespace {
 
-// Whether most points of the level at z = hi (within `band`, with a
-// horizontal surface's normal) have a point kBelowFrom to kBelowTo lower in
-// their cell of kBelowCell across: marked in a grid over the level's
-// cells (a hash of the cells where that grid would be too large).
-bool wallBelowLevel(const Points& points, const Normals& normals, const Parameters& p, double hi, double band) {
+// Whether most points of the level at z = hi (those of `horizontal`, the
+// points with a horizontal surface's normal, within `band`) have a point
+// kBelowFrom to kBelowTo lower in their cell of kBelowCell across: marked
+// in a grid over the level's cells (a hash of the cells where that grid
+// would be too large).
+bool wallBelowLevel(const Points& points, const std::vector<std::size_t>& horizontal, double hi, double band) {
   std::vector<std::size_t> level;
   float x0 = std::numeric_limits<float>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
-  for (std::size_t i = 0; i < points.size(); ++i)
-    if (std::abs(normals.n[i].z()) > p.horizontal_normal_z && std::abs(points[i].z() - hi) <= band) {
+  for (const std::size_t i : horizontal)
+    if (std::abs(points[i].z() - hi) <= band) {
       level.push_back(i);
       x0 = std::min(x0, points[i].x()), x1 = std::max(x1, points[i].x());
       y0 = std::min(y0, points[i].y()), y1 = std::max(y1, points[i].y());
@@ -78,8 +79,9 @@ bool wallBelowLevel(const Points& points, const Normals& normals, const Paramete
 FloorCeiling findFloorCeiling(const Points& points, const Normals& normals, const Parameters& p, double viewpoint_z) {
   FloorCeiling fc;
   std::vector<float> z;
+  std::vector<std::size_t> horizontal;  // the points with a horizontal surface's normal, whose z these are
   for (std::size_t i = 0; i < points.size(); ++i)
-    if (std::abs(normals.n[i].z()) > p.horizontal_normal_z) z.push_back(points[i].z());
+    if (std::abs(normals.n[i].z()) > p.horizontal_normal_z) z.push_back(points[i].z()), horizontal.push_back(i);
   if (z.size() < 50) return fc;
   const auto [mn, mx] = std::minmax_element(z.begin(), z.end());
   const double z0 = *mn, bin = std::max(p.histogram_bin, (*mx - z0) / 100000.0);
@@ -114,7 +116,7 @@ FloorCeiling findFloorCeiling(const Points& points, const Normals& normals, cons
       above += points[i].z() > hi + kAboveCeiling;
     }
   bool closes = above < std::max<std::size_t>(kAboveCeilingPoints, vertical / 50);
-  if (closes) closes = !wallBelowLevel(points, normals, p, hi, 1.5 * bin);
+  if (closes) closes = !wallBelowLevel(points, horizontal, hi, 1.5 * bin);
   if (hi - lo >= p.min_room_height && closes) {
     fc.floor = lo;
     fc.ceiling = hi;
