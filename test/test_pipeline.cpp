@@ -465,6 +465,16 @@ TEST(Segmentation, ALevelWithWallBelowItIsNoCeiling) {
   ASSERT_TRUE(rings.floor);
   EXPECT_NEAR(*rings.floor, 0.0, 0.02);
   EXPECT_FALSE(rings.ceiling) << "a ceiling at " << *rings.ceiling << " on the walls' top ring";
+  {
+    // The same level spread over a box too large for the grid of its cells
+    // (one more of its points 5 km off): the cells are hashed, the same answer.
+    segmentation::Points far = pts;
+    segmentation::Normals far_n = normals;
+    far.emplace_back(5000.0f, 5000.0f, 1.9f);
+    far_n.n.push_back(up);
+    const segmentation::FloorCeiling hashed = segmentation::findFloorCeiling(far, far_n, p, 1.0);
+    EXPECT_FALSE(hashed.ceiling) << "a ceiling at " << *hashed.ceiling << " with the level's cells hashed";
+  }
   // The same with a ceiling at 2.5 m over the whole room.
   for (float x = -1.95f; x <= 1.95f; x += 0.05f)
     for (float y = -1.95f; y <= 1.95f; y += 0.05f) add(x, y, 2.5f, -up);
