@@ -1173,11 +1173,14 @@ TEST(DoorState, CameraFramesFindTheDoorInView) {
   // Since "in_view" needs a clear sight line to any of 9 points of the
   // doorway (not its middle 1 m up): 3004's second closed door, its doorway
   // partly in the image (leaf_in_view 0.25), is in view and missed: 11 of 13.
-  EXPECT_GE(m.recall(), 0.84);
+  // Since a plane with points crowding just before it is no leaf
+  // (LeafSearch::crowdBefore), 3000's door, measured at 170 deg for 92 (its
+  // leaf swung away, seen edge-on), is no longer reported: 10 of 13.
+  EXPECT_GE(m.recall(), 0.76);
   // Since the levelling of issue 21 (a given axis refined within 25 deg):
-  // 3000's leaf, open 92 deg and seen edge-on, is measured about 10 deg off
-  // its wall's plane (open at 169 deg before, semi-open at 10 since: wrong
-  // either way); 3002, pitched 3 deg, is levelled 2.4 deg off (2.5 before)
+  // 3000's leaf, open 92 deg and seen edge-on, was measured about 10 deg off
+  // its wall's plane (open at 169 deg, semi-open at 10: wrong either way;
+  // not reported since, above); 3002, pitched 3 deg, is levelled 2.4 deg off (2.5 before)
   // and its closed door placed 0.8 m aside (a false door and a miss; a
   // 0.07 deg difference in level decides it). Held at 11 of 12 reported
   // and 9 of 11 states.
@@ -1228,6 +1231,44 @@ TEST(DoorState, AnUnseenLeafIsReportedNotClosedAtItsBound) {
     EXPECT_NEAR(d.clear_width, clearWidth(d.width, d.opening_angle_deg, p.leaf_thickness, p.closed_below_deg), 1e-12);
     EXPECT_GT(d.clear_width, 0.0);
     EXPECT_LT(d.clear_width, d.width);
+  }
+}
+
+// A leaf swung away out of the scanner's sight, and beside its hinge jamb
+// a shelf unit or an open cupboard against the wall: a plane hinged at the
+// jamb and laid out over the unit at 130-170 deg, towards the scanner, cuts
+// through its shelves and what stands on them and holds points in a third
+// of its cells. But a leaf the scanner saw has free space before it, on
+// the scanner's side; the unit's contents crowd just as densely before that
+// plane as in it (LeafSearch::crowdBefore). No leaf is measured there: the
+// door is reported at the bound free space gives (or, where it has none,
+// not at all), never as a leaf 60 deg off. Laser room 1021 with clutter
+// (tls-400k-clutter sweep): before, 169.5 deg for 110.
+TEST(DoorState, APlaneThroughAShelfUnitsContentsIsNoLeaf) {
+  for (const auto& [seed, clutter] : {std::pair<std::uint64_t, bool>{1021, true}}) {
+    sim::RandomSceneOptions ro;
+    ro.clutter = clutter;
+    const sim::Scene scene = sim::buildScene(sim::randomRoom(seed, ro));
+    sim::TlsOptions o;
+    o.seed = seed;
+    const Scored s = runAndScore(scene, sim::scanTls(scene, o), Parameters{});
+    SCOPED_TRACE(::testing::Message() << "seed=" << seed << (clutter ? " clutter " : " ") << describe(s) << trace(s));
+    int unseen = 0;
+    for (std::size_t i = 0; i < s.truth["doors"].size(); ++i) {
+      const nlohmann::json& t = s.truth["doors"][i];
+      if (t["leaf_in_view"].get<double>() >= 0.5) continue;
+      ++unseen;
+      const eval::DoorMatch* m = matchOf(s, static_cast<int>(i));
+      if (!m) continue;
+      const DoorResult& d = s.result.doors.at(static_cast<std::size_t>(m->report_index));
+      const double angle = t["opening_angle_deg"].get<double>();
+      if (d.angle_is_lower_bound) {
+        EXPECT_LE(d.opening_angle_deg, angle + 2.0) << "door " << i << ": a bound from below";
+      } else {
+        EXPECT_NEAR(d.opening_angle_deg, angle, 10.0) << "door " << i << ": a leaf measured";
+      }
+    }
+    EXPECT_EQ(unseen, 1) << "the leaf out of sight";
   }
 }
 

@@ -164,6 +164,17 @@ struct LeafSearch {
   double band_face = 0;
 
   // The leaf measured (leaf_measure.cpp).
+  // A leaf seen by the sensor has free space before it, on the sensor's
+  // side: a plane fitted through a volume (a bookcase's or an open
+  // cupboard's contents, a shelf unit) has as many points just before it as
+  // in it. crowdBefore: the points within kCrowdSlab (m) past the leaf's
+  // band on the sensor's side, over its length less kCrowdFromHinge at the
+  // hinge and kCrowdToTip at the tip, per point in its band. A leaf above
+  // kCrowdFromDeg at kCrowdShare or more is no leaf; below, the jamb
+  // and the trim at the latch stand before a leaf ajar.
+  static constexpr double kCrowdSlab = 0.1, kCrowdFromHinge = 0.1, kCrowdToTip = 0.05;
+  static constexpr double kCrowdFromDeg = 30, kCrowdShare = 0.5;
+  double crowdBefore(double angle_deg, double len) const;
   double s_h = 0, s_other = 0, e0 = 0, m = 0, d_h = 0;
   Eigen::Vector2d toXY(double s, double d) const;
 };

@@ -17,6 +17,23 @@ namespace detail {
 
 Eigen::Vector2d LeafSearch::toXY(double s, double d) const { return wall.point + s * wall.direction + d * wall.normal; }
 
+double LeafSearch::crowdBefore(double angle_deg, double len) const {
+  const double th = angle_deg * M_PI / 180;
+  const Eigen::Vector2d e(std::cos(th) * e0, std::sin(th) * m), k(std::sin(th) * e0, -std::cos(th) * m);
+  // The sensor's side of the leaf's plane; "out" measures past the band on that side.
+  const double side = (vsd - Eigen::Vector2d(s_h, d_h)).dot(k) >= 0 ? 1.0 : -1.0;
+  int in_band = 0, before = 0;
+  for (const Local& q : pts) {
+    const Eigen::Vector2d r(q.s - s_h, q.d - d_h);
+    const double a = r.dot(e), b = r.dot(k);
+    if (a < kCrowdFromHinge || a > len - kCrowdToTip) continue;
+    const double out = side > 0 ? b - (lt + tol) : -tol - b;
+    if (b >= -tol && b <= lt + tol) ++in_band;
+    else if (out > 0 && out <= kCrowdSlab) ++before;
+  }
+  return in_band > 0 ? static_cast<double>(before) / in_band : 0.0;
+}
+
 void LeafSearch::measureLeaf() {
   fit.best_angle_deg = best_deg;
   fit.best_coverage = gen_cov;
@@ -123,7 +140,10 @@ void LeafSearch::measureLeaf() {
     const bool cut_by_view = in_view >= 0.25 && in_view < 0.9 && gen_contra <= 0.05 &&
                              cov >= (sure_doorway ? 0.5 : 1.0) * p.min_leaf_coverage * in_view;
     const double min_cov = p.min_leaf_coverage * fit.sampling;
-    if (cov >= min_cov || (sure_doorway && cov >= 0.5 * min_cov && gen_contra <= 0.05) || cut_by_view) {
+    // A plane through a volume is no leaf (crowdBefore).
+    fit.crowd_before = crowdBefore(angle, len);
+    const bool in_volume = angle >= kCrowdFromDeg && fit.crowd_before >= kCrowdShare;
+    if (!in_volume && (cov >= min_cov || (sure_doorway && cov >= 0.5 * min_cov && gen_contra <= 0.05) || cut_by_view)) {
       fit.found = true;
       fit.coverage = cov;
       fit.angle_deg = angle;

@@ -47,6 +47,10 @@ struct LeafFit {
   // it from the sensor (in front of the wall, sight line meeting the wall
   // inside the doorway) which lie on the leaf (0 when none or not computed).
   double occluders_explained = 0;
+  // Points just before the leaf measured, on the sensor's side, per point
+  // in its band (a plane through a shelf unit's contents: as many; a leaf:
+  // none). Above 0.5 at 30 deg or more the leaf is not taken.
+  double crowd_before = 0;
   // How densely the scan samples surfaces at the doorway: the share of the
   // 5 x 10 cm cells of the wall's face beside it (0.15-0.6 m beyond either
   // jamb, the better side) holding points, over kDenseWallCover, clamped to
