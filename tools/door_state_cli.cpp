@@ -225,13 +225,22 @@ int main(int argc, char** argv) {
     }
     std::vector<std::string> sight_notes;
     bool without_viewpoint = viewpoint_arg == "none";
+    // A station's points hidden from its VIEWPOINT, where few (its depth
+    // edges in a cluttered room), are left out: the rest are its rays.
+    std::vector<pcl::PointCloud<pcl::PointXYZ>> seen(clouds.size());
     if (viewpoint_arg == "auto")
       for (std::size_t k = 0; k < stations.size() && !without_viewpoint; ++k) {
-        const dsr::sight::ViewpointCheck check = dsr::sight::checkViewpoint(clouds[k], stations[k].viewpoint, params);
+        const dsr::sight::ViewpointCheck check =
+            dsr::sight::checkViewpoint(clouds[k], stations[k].viewpoint, params, &seen[k]);
         const Eigen::Vector3d& vp = stations[k].viewpoint;
         char at[120];
         std::snprintf(at, sizeof at, "(%.3g, %.3g, %.3g)", vp.x(), vp.y(), vp.z());
-        if (!check.credible) {
+        if (check.take_visible) {
+          sight_notes.push_back("viewpoint: " + inputs[k] + "'s VIEWPOINT " + at + " taken, the " +
+                                std::to_string(clouds[k].size() - seen[k].size()) +
+                                " points hidden from it left out: " + check.reason);
+          stations[k].cloud = &seen[k];
+        } else if (!check.credible) {
           without_viewpoint = true;
           sight_notes.push_back("viewpoint: " + inputs[k] + "'s VIEWPOINT " + at + " is not credible: " + check.reason +
                                 "; run without a viewpoint");

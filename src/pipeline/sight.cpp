@@ -226,7 +226,7 @@ class RangeSphere {
 }  // namespace
 
 ViewpointCheck checkViewpoint(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vector3d& viewpoint,
-                              const Parameters& p) {
+                              const Parameters& p, pcl::PointCloud<pcl::PointXYZ>* visible) {
   ViewpointCheck c;
   if (cloud.height > 1) {
     c.credible = true;
@@ -246,9 +246,25 @@ ViewpointCheck checkViewpoint(const pcl::PointCloud<pcl::PointXYZ>& cloud, const
   c.tested = occ.p.size();
   c.hidden_share = static_cast<double>(hidden) / static_cast<double>(c.tested);
   c.credible = c.hidden_share <= kMaxHiddenShare;
+  c.take_visible = !c.credible && c.hidden_share <= kTakeVisibleUpTo;
+  if (visible && c.take_visible) {
+    visible->clear();
+    const float lim = static_cast<float>(p.max_abs_coordinate);
+    for (const auto& q : cloud.points) {
+      const Eigen::Vector3f x = q.getVector3fMap();
+      if (x.allFinite() && !(x.cwiseAbs().maxCoeff() > lim) && !sphere.hidden(x)) visible->push_back(q);
+    }
+    visible->width = static_cast<std::uint32_t>(visible->size());
+    visible->height = 1;
+    visible->is_dense = true;
+    visible->sensor_origin_ = cloud.sensor_origin_;
+    visible->sensor_orientation_ = cloud.sensor_orientation_;
+  }
   char buf[200];
-  std::snprintf(buf, sizeof buf, "%.1f %% of the points lie behind other surfaces seen from it (a single scan: <= %.0f %%)",
-                100 * c.hidden_share, 100 * kMaxHiddenShare);
+  std::snprintf(buf, sizeof buf,
+                "%.1f %% of the points lie behind other surfaces seen from it (one sensor's own: <= %.0f %%; "
+                "up to %.0f %%, a cluttered room's depth edges, those left out)",
+                100 * c.hidden_share, 100 * kMaxHiddenShare, 100 * kTakeVisibleUpTo);
   c.reason = buf;
   return c;
 }
