@@ -143,7 +143,8 @@ void LeafSearch::measureLeaf() {
     // A plane through a volume is no leaf (crowdBefore).
     fit.crowd_before = crowdBefore(angle, len);
     const bool in_volume = angle >= kCrowdFromDeg && fit.crowd_before >= kCrowdShare;
-    if (!in_volume && (cov >= min_cov || (sure_doorway && cov >= 0.5 * min_cov && gen_contra <= 0.05) || cut_by_view)) {
+    const bool covered = cov >= min_cov || (sure_doorway && cov >= 0.5 * min_cov && gen_contra <= 0.05) || cut_by_view;
+    if (covered && !in_volume) {
       fit.found = true;
       fit.coverage = cov;
       fit.angle_deg = angle;
