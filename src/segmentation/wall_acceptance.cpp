@@ -231,9 +231,27 @@ void addWallSegments(const Points& points, const std::vector<int>& inliers, cons
     };
     const bool cut = cutByView();
     const bool reaches_top = !ceiling_known || w.z_max > height_top - 0.25 || cut;
-    // Tall: from near the floor up to the share of the room a wall spans, or
-    // (cut by the view) as high as a door at least.
-    const bool tall = (h >= p.wall_height_ratio * room_h || (cut && h >= p.door_min_height)) && w.z_min < floor_z + 0.5;
+    // The view's bottom: the lowest points of the wall are the lowest seen
+    // on most of its bearings (a camera pitched up, or close to a wall,
+    // sees no floor before it); where the floor or anything standing before
+    // the wall is seen below it, it is not cut there.
+    auto cutBelowByView = [&]() {
+      if (!view || view->min_tan.empty()) return false;
+      std::vector<float> low(view->min_tan.size(), std::numeric_limits<float>::infinity());
+      for (int i : w.inliers) {
+        const auto& q = points[i];
+        const int b = view->bin(q);
+        if (b >= 0) low[b] = std::min(low[b], view->tanElevation(q));
+      }
+      int bins = 0, cut_low = 0;
+      for (std::size_t b = 0; b < low.size(); ++b)
+        if (std::isfinite(low[b])) ++bins, cut_low += low[b] <= view->min_tan[b] + kViewTopSlack;
+      return bins > 0 && cut_low >= 0.5 * bins;
+    };
+    // Tall: from near the floor (or from the view's bottom) up to the share
+    // of the room a wall spans, or (cut by the view) as high as a door at least.
+    const bool from_floor = w.z_min < floor_z + 0.5 || cutBelowByView();
+    const bool tall = (h >= p.wall_height_ratio * room_h || (cut && h >= p.door_min_height)) && from_floor;
     // A plane parallel to a stronger wall and close behind or before it
     // (a recessed leaf, trim, a cupboard front) is not another wall; nor is
     // one a few degrees off a stronger wall and close to it all along (a
