@@ -109,13 +109,26 @@ void DoorwaySearch::findTrimLegs() {
       }
       int e = c;
       while (e + 1 < sub && stands_out(e + 1)) ++e;
-      const bool known = std::any_of(legs.begin(), legs.end(), [&](const std::pair<int, int>& g) {
-        return g.first <= e && c <= g.second;
-      });
+      // A leg found by (1) in part (noise leaves some of its sub-columns
+      // short of the share) spans the run standing out of its neighbours.
+      bool known = false;
+      for (std::pair<int, int>& g : legs)
+        if (g.first <= e && c <= g.second) {
+          known = true;
+          if (e > c && (std::max(e, g.second) - std::min(c, g.first) + 1) * half <= 0.13)
+            g = {std::min(c, g.first), std::max(e, g.second)};
+        }
       if (!known && e > c && (e - c + 1) * half <= 0.13) legs.push_back({c, e});
       c = e + 1;
     }
     std::sort(legs.begin(), legs.end());
+    // Legs of (1) widened into one run are one leg.
+    std::vector<std::pair<int, int>> merged;
+    for (const std::pair<int, int>& g : legs) {
+      if (!merged.empty() && g.first <= merged.back().second) merged.back().second = std::max(merged.back().second, g.second);
+      else merged.push_back(g);
+    }
+    legs.swap(merged);
   }
   // A leg with an opening just beyond its outer edge (one of the two
   // columns there seen through) is that opening's casing and pairs with no
