@@ -416,11 +416,13 @@ InferredStations inferStations(const pcl::PointCloud<pcl::PointXYZ>& cloud, cons
 
   mark("sight_score");
   // Greedy cover: the position seeing most of what no chosen one sees, while
-  // it adds a station's worth (kMinGain of the sample).
-  constexpr double kMinGain = 0.08;
+  // it adds a station's worth (kMinGain of the sample: main stations), then
+  // while it adds kMinGainMinor (minor stations, whose doors only refine).
+  constexpr double kMinGain = 0.08, kMinGainMinor = 0.03;
   constexpr int kMaxStations = 6;
   std::vector<char> covered(sample.size(), 0);
   std::vector<std::size_t> chosen;
+  std::size_t main_count = 0;
   while (static_cast<int>(chosen.size()) < kMaxStations) {
     std::size_t best = cand.size(), best_gain = 0;
     for (std::size_t c = 0; c < cand.size(); ++c) {
@@ -428,11 +430,14 @@ InferredStations inferStations(const pcl::PointCloud<pcl::PointXYZ>& cloud, cons
       for (std::size_t k = 0; k < sample.size(); ++k) gain += sees[c][k] && !covered[k];
       if (gain > best_gain) best_gain = gain, best = c;
     }
-    if (best == cand.size() || static_cast<double>(best_gain) < kMinGain * static_cast<double>(sample.size())) break;
+    if (best == cand.size() || static_cast<double>(best_gain) < kMinGainMinor * static_cast<double>(sample.size())) break;
+    if (static_cast<double>(best_gain) >= kMinGain * static_cast<double>(sample.size()) && main_count == chosen.size())
+      ++main_count;
     chosen.push_back(best);
     for (std::size_t k = 0; k < sample.size(); ++k) covered[k] |= sees[best][k];
   }
-  if (chosen.empty()) return out;
+  if (main_count == 0) return out;
+  out.main = main_count;
 
   // Every input point to each chosen station that sees it (a point seen from
   // two stations is in both scans, as in a survey).

@@ -85,14 +85,21 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
   Parameters each = params_;
   each.unseen_leaf_min_bound_deg = std::min(each.unseen_leaf_min_bound_deg, each.closed_below_deg);
   const Pipeline per_station(each);
-  std::vector<PipelineResult> runs;
-  runs.reserve(stations.size());
-  for (const Station& st : stations) runs.push_back(per_station.run(*st.cloud, false, st.viewpoint));
+  std::vector<PipelineResult> runs(stations.size());
+  for (std::size_t k = 0; k < stations.size(); ++k)
+    if (!stations[k].refine_only) runs[k] = per_station.run(*stations[k].cloud, false, stations[k].viewpoint);
+  // Refine-only stations refine only doors whose leaf no other station saw
+  // (below): run only where some door is such.
+  const bool refine = std::any_of(runs.begin(), runs.end(), [](const PipelineResult& r) {
+    return std::any_of(r.doors.begin(), r.doors.end(), [](const DoorResult& d) { return d.angle_is_lower_bound; });
+  });
+  for (std::size_t k = 0; k < stations.size(); ++k)
+    if (stations[k].refine_only && refine) runs[k] = per_station.run(*stations[k].cloud, false, stations[k].viewpoint);
 
-  // The frame of the station that kept the most points after thinning.
+  // The frame of the main station that kept the most points after thinning.
   std::size_t primary = 0;
   for (std::size_t k = 1; k < runs.size(); ++k)
-    if (runs[k].points_used > runs[primary].points_used) primary = k;
+    if (!stations[k].refine_only && runs[k].points_used > runs[primary].points_used) primary = k;
   PipelineResult res;
   res.up = runs[primary].up;
   res.floor = runs[primary].floor;
@@ -232,10 +239,20 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
   // that station's jambs and hinge. Replacing a measured leaf more than 5 deg
   // below another station's bound by the bound lost four correct doors in
   // the beyond and stations3 sweeps for one it mended.)
+  // A refine-only station's report of a door others report takes part only
+  // where none of theirs saw the leaf (all lower bounds), and only with the
+  // leaf measured: it sees little, and is trusted for what the others could
+  // not see (its free space, from where no scanner may have stood, bounds
+  // nothing).
   for (const std::vector<std::size_t>& g : groups) {
-    const DoorResult* best = &reports[g.front()];
+    const DoorResult* best = nullptr;
     for (std::size_t i : g)
-      if (surerReport(reports[i], *best)) best = &reports[i];
+      if (!stations[report_station[i]].refine_only && (!best || surerReport(reports[i], *best))) best = &reports[i];
+    if (!best) continue;  // a door only refine-only stations report is none
+    if (best->angle_is_lower_bound)
+      for (std::size_t i : g)
+        if (stations[report_station[i]].refine_only && !reports[i].angle_is_lower_bound && surerReport(reports[i], *best))
+          best = &reports[i];
     res.doors.push_back(*best);
   }
   res.doors.erase(std::remove_if(res.doors.begin(), res.doors.end(),
@@ -311,7 +328,7 @@ PipelineResult Pipeline::runWithoutViewpoint(const pcl::PointCloud<pcl::PointXYZ
   } else {
     std::vector<Station> stations;
     for (std::size_t k = 0; k < inferred.viewpoints.size(); ++k)
-      stations.push_back({&inferred.clouds[k], inferred.viewpoints[k]});
+      stations.push_back({&inferred.clouds[k], inferred.viewpoints[k], k >= inferred.main});
     res = runStations(stations, with_reconstruction);
     res.viewpoint.reset();
     res.stations = inferred.viewpoints;

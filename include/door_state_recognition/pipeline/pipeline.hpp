@@ -142,6 +142,9 @@ struct PipelineResult {
 struct Station {
   const pcl::PointCloud<pcl::PointXYZ>* cloud = nullptr;
   Eigen::Vector3d viewpoint = Eigen::Vector3d::Zero();
+  // Its doors only refine doors other stations found (a station inferred
+  // from few points of its own: runWithoutViewpoint), never add one.
+  bool refine_only = false;
 };
 
 class Pipeline {

@@ -67,6 +67,10 @@ ViewpointCheck checkViewpoint(const pcl::PointCloud<pcl::PointXYZ>& cloud, const
 struct InferredStations {
   std::vector<pcl::PointCloud<pcl::PointXYZ>> clouds;  // the points each station sees, input frame
   std::vector<Eigen::Vector3d> viewpoints;            // input frame
+  // The first `main` stations each saw a station's worth of points no
+  // earlier one saw; the others (minor) less, though still some: the
+  // leaf of a door seen only from there (see inferStations).
+  std::size_t main = 0;
   std::size_t unseen = 0;                             // points no inferred station sees (left out)
   Eigen::Vector3d up = Eigen::Vector3d::UnitZ();       // up used to place them, input frame
   std::vector<std::pair<std::string, double>> timing_ms;  // its steps, in order
@@ -75,7 +79,10 @@ struct InferredStations {
 // Stations inferred from the cloud's surfaces (see above). Candidates stand
 // on a horizontal grid over the cloud's extent at a scanner's height; the
 // one that sees the most points not yet seen is taken first, and so on while
-// a candidate adds a share worth a station. Empty when the cloud has too few
+// a candidate adds a share worth a station (main), then while one adds a
+// smaller share, as a station seeing little the others did not (minor: a
+// leaf swung out of the main stations' sight, into a corner a third
+// scanner looked into, lies in that share). Empty when the cloud has too few
 // points or no candidate sees enough of it.
 InferredStations inferStations(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Parameters& p);
 
