@@ -1122,6 +1122,24 @@ TEST(DoorState, ATrimLegFoundInPartSpansItsWholeRun) {
   EXPECT_EQ(s.eval.state_correct, 1);
 }
 
+TEST(DoorState, ALeafAjarTowardsTheCameraMeetsItsWallPastTheDoorwaySeen) {
+  // A doorway hidden by something in front is searched for a leaf swung
+  // towards the sensor when the occluders' line meets the wall near a jamb
+  // (mayBeOwnLeaf). Near its hinge a leaf ajar lies within the wall's face
+  // band (face tolerance plus its thickness: 7 cm) for 7 cm / sin(angle)
+  // along the wall, and the doorway seen ends there: robot camera frame
+  // 2026 (tuning seed), a leaf at 24 deg, met the wall 17 cm past the
+  // doorway's end, beyond the 15 cm allowed: no search, no door. The reach
+  // is now that length plus a grid cell (at least 15 cm).
+  const Scored s = runRobotFrame(2026, sim::DepthModel::Default, false);
+  SCOPED_TRACE(describe(s) + trace(s));
+  EXPECT_EQ(s.eval.matched, 1);
+  EXPECT_EQ(s.eval.reported_doors, 1);
+  EXPECT_EQ(s.eval.state_correct, 1);
+  ASSERT_EQ(s.result.doors.size(), 1u);
+  EXPECT_NEAR(s.result.doors[0].opening_angle_deg, 24.0, 3.0);
+}
+
 TEST(DoorState, AClosedDoorBesideALeafSwungTowardsTheCameraKeepsItsTrim) {
   // A trim leg with an opening just beyond it is that opening's casing and
   // pairs with no other leg (recognition/doorway_trim.cpp). A leaf swung

@@ -29,7 +29,7 @@ constexpr double kBoxSideDeg = 5.0;
 // The look before the search (mayBeOwnLeaf): the plane's rms (m) and how
 // near a jamb it meets the wall's face (m).
 constexpr double kOwnLeafRms = 0.05;
-constexpr double kOwnLeafJamb = 0.15;
+constexpr double kOwnLeafJamb = 0.15, kOwnLeafJambMax = 0.3;
 // A door whose leaf was not seen (its angle a lower bound from free space).
 constexpr double kUnseenLeafConfidence = 0.3;
 // m: no wall holding a door is this thick (interior walls 0.1-0.3 m, heavy
@@ -203,7 +203,13 @@ bool mayBeOwnLeaf(const segmentation::Points& pts, const segmentation::WallPlane
   const double angle = std::acos(std::min(1.0, std::abs(l.direction.x()))) * 180 / M_PI;  // to the wall, 0-90
   if (rms > kOwnLeafRms || std::abs(l.direction.y()) < 1e-6 || 90 - angle < kBoxSideDeg) return false;
   const double s_face = l.point.x() - l.point.y() / l.direction.y() * l.direction.x();  // where it meets d = 0
-  return std::min(std::abs(s_face - d.s0), std::abs(s_face - d.s1)) <= kOwnLeafJamb;
+  // Near its hinge a leaf ajar lies within the wall's face band (the face
+  // tolerance and its thickness) for that over sin(angle) along the wall,
+  // and the doorway seen ends there, a grid cell on; no farther than the
+  // leaf search moves a hinge (kOwnLeafJambMax).
+  const double band = p.face_tolerance + p.leaf_thickness;
+  const double reach = std::clamp(band / std::sin(angle * M_PI / 180) + p.grid_cell, kOwnLeafJamb, kOwnLeafJambMax);
+  return std::min(std::abs(s_face - d.s0), std::abs(s_face - d.s1)) <= reach;
 }
 
 // How deep the space seen through a doorway is: the median distance behind
