@@ -6,6 +6,7 @@ the merged figures as JSON (plus one line per scene with --verbose).
   scripts/eval_sweep.py [--sensor tls|rgbd|lidar16|lidar32|lidar64|lidar128] [--scenes N] [--first-seed S]
                         [--points N] [--viewpoints K] [--beyond-doors] [--no-handles] [--up AXIS] [--config FILE] [--jobs J]
                         [--merge] [--mesh-like N] [--clutter] [--partition] [--corridor]
+                        [--varied-doors]
                         [--depth-model M] [--robot-camera] [--verbose] [--out DIR]
 
 With --merge or --mesh-like the CLI gets the one merged cloud (VIEWPOINT 0 0 0,
@@ -24,6 +25,7 @@ def one(args, seed, out):
     sim = [str(BIN / "door_scene_sim"), "--quiet", "--sensor", args.sensor, "--seed", str(seed),
            "--out", str(prefix), "--formats", "pcd,json"] + (["--no-handles"] if args.no_handles else [])
     sim += [f"--{k}" for k in ("clutter", "partition", "corridor") if getattr(args, k)]
+    sim += ["--varied-doors"] if args.varied_doors else []
     merged = args.merge or args.mesh_like > 0
     sim += ["--merge"] if args.merge else []
     sim += ["--mesh-like", str(args.mesh_like)] if args.mesh_like > 0 else []
@@ -67,6 +69,8 @@ def main():
                     help="TLS: the merged cloud resampled as N mesh vertices (door_scene_sim --mesh-like N)")
     ap.add_argument("--clutter", action="store_true", help="random rooms with clutter (door_scene_sim --clutter)")
     ap.add_argument("--partition", action="store_true", help="random rooms with a bathroom (door_scene_sim --partition)")
+    ap.add_argument("--varied-doors", action="store_true",
+                    help="door joinery varied per room, a third without casing (door_scene_sim --varied-doors)")
     ap.add_argument("--corridor", action="store_true", help="corridors (door_scene_sim --corridor)")
     ap.add_argument("--depth-model", default=None, choices=["default", "structured", "tof", "stereo"],
                     help="RGB-D depth error of a camera family (door_scene_sim --depth-model)")
@@ -124,7 +128,7 @@ def main():
     if args.sensor == "tls":
         summary.update(points=args.points, viewpoints=args.viewpoints, beyond_doors=args.beyond_doors,
                        merge=args.merge, mesh_like=args.mesh_like)
-    summary.update({k: True for k in ("clutter", "partition", "corridor") if getattr(args, k)})
+    summary.update({k: True for k in ("clutter", "partition", "corridor", "varied_doors") if getattr(args, k)})
     print(json.dumps(summary, indent=1))
 
 if __name__ == "__main__":

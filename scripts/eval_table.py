@@ -27,7 +27,9 @@ merged3-400k-SEED (2 or 3 stations, 400k rays in all, merged into ONE cloud in
 frame map with VIEWPOINT 0 0 0; the CLI gets that one file), mesh40k-SEED
 (3 stations merged, then resampled as 40k mesh-like vertices). -clutter-,
 -partition- or -corridor- before the seed give the random rooms those options
-(e.g. merged3-400k-clutter-SEED, tls-400k-clutter-SEED). EVAL_SCENES=N runs N
+(e.g. merged3-400k-clutter-SEED, tls-400k-clutter-SEED); -varied- before
+the seed varies the door joinery (door_scene_sim --varied-doors: a third of
+rooms without casing). EVAL_SCENES=N runs N
 scenes per sweep instead of 30.
 RGB-D camera families (not in the default list): rgbd-structured-SEED,
 rgbd-tof-SEED, rgbd-stereo-SEED (door_scene_sim --depth-model), and
@@ -75,6 +77,7 @@ def sweep_args(name, config_dir):
         args = ["--sensor", "tls", "--viewpoints", str(stations), "--points", str(RAYS[parts[1]] * stations),
                 "--first-seed", seed]
     args += [f"--{k}" for k in ("clutter", "partition", "corridor") if k in parts]
+    args += ["--varied-doors"] if "varied" in parts else []
     if os.environ.get("EVAL_SCENES"):
         args += ["--scenes", os.environ["EVAL_SCENES"]]
     if "nohandles" in parts:

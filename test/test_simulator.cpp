@@ -904,6 +904,40 @@ TEST(Clutter, OptionsAreDeterministicAndLeaveThePlainRoomAlone) {
   }
 }
 
+// Varied joinery: per room, no casing at all or casing of other sizes, and
+// leaves of other thicknesses; the doors themselves as they were.
+TEST(Clutter, VariedDoorsDrawJoineryPerRoomSomeWithoutCasing) {
+  int without = 0, with = 0;
+  for (std::uint64_t seed = 600; seed < 630; ++seed) {
+    SCOPED_TRACE(seedTrace(seed));
+    RandomSceneOptions o;
+    o.varied_doors = true;
+    const RoomSpec plain = randomRoom(seed), varied = randomRoom(seed, o);
+    EXPECT_EQ(varied.width, plain.width);
+    ASSERT_EQ(varied.doors.size(), plain.doors.size());
+    for (std::size_t i = 0; i < plain.doors.size(); ++i) {  // the casing's room along the wall moves it a little
+      EXPECT_NEAR(varied.doors[i].center, plain.doors[i].center, 0.1);
+      EXPECT_EQ(varied.doors[i].angle_deg, plain.doors[i].angle_deg);
+    }
+    EXPECT_GE(varied.leaf_thickness, 0.03);
+    EXPECT_LE(varied.leaf_thickness, 0.055);
+    const Scene scene = buildScene(varied);
+    const auto casings = std::count_if(scene.boxes.begin(), scene.boxes.end(),
+                                       [](const Box& b) { return b.surface == Surface::Casing; });
+    if (varied.casing_width == 0) {
+      ++without;
+      EXPECT_EQ(casings, 0);
+    } else {
+      ++with;
+      EXPECT_GE(varied.casing_width, 0.04);
+      EXPECT_LE(varied.casing_width, 0.10);
+      EXPECT_EQ(casings, static_cast<long>(6 * varied.doors.size()));
+    }
+  }
+  EXPECT_GT(without, 3);
+  EXPECT_GT(with, 10);
+}
+
 // ---------------------------------------------------------------------------
 // Rotating LiDAR
 

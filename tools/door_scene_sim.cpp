@@ -98,6 +98,9 @@ options:
                          walls 4 and 5; its door is in the truth)
   --corridor             random room: a corridor 6-12 m x 1.5-2.2 m, its doors
                          (2 to MAX+2 of --doors) along the two long walls
+  --varied-doors         random room: door joinery varied per room: a third with
+                         no casing (plain openings), the rest casing 4-10 cm wide
+                         and 0.8-3 cm deep; leaves 3-5.5 cm thick
   --bag-count N          clouds in the bag (default 3), --bag-rate HZ (default 1)
   --fixed-frame NAME     parent frame of the tf in the bag (default map)
 
@@ -260,6 +263,7 @@ int main(int argc, char** argv) {
       } else if (a == "--clutter") random_options.clutter = true;
       else if (a == "--partition") random_options.partition = true;
       else if (a == "--corridor") random_options.corridor = true;
+      else if (a == "--varied-doors") random_options.varied_doors = true;
       else if (a == "--zeros") zeros = true;
       else if (a == "--mount-height") mount_height = toDouble(a, value());
       else if (a == "--drive") drive = true;

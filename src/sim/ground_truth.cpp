@@ -40,6 +40,10 @@ nlohmann::json groundTruthJson(const Scene& scene, const SimulatedCloud& cloud) 
     door["swing"] = d.swing_into_room ? "toward_viewer" : "away_from_viewer";
     door["hinge_side"] = d.hinge_left ? "left" : "right";
     door["recess"] = d.recess;
+    // The room's joinery (door_scene_sim --varied-doors varies it).
+    door["casing_width"] = scene.spec.casing_width;
+    door["casing_depth"] = scene.spec.casing_depth;
+    door["leaf_thickness"] = scene.spec.leaf_thickness;
     door["wall"] = d.wall;
     door["wall_normal"] = vec(R * d.wall_normal);
     // A camera sees a door when part of its doorway is in the image with a

@@ -365,8 +365,8 @@ Scene buildScene(const RoomSpec& r) {
       const int di = o.door;
       const DoorSpec& d = r.doors[di];
       const double a = d.center - d.width / 2, b = d.center + d.width / 2;
-      // Casing trim on both faces: two legs and a head.
-      for (int side = 0; side < 2; ++side) {
+      // Casing trim on both faces: two legs and a head (none in a plain opening).
+      for (int side = 0; side < 2 && cw > 0 && cp > 0; ++side) {
         const double d0 = side == 0 ? 0.0 : -tw - cp, d1 = side == 0 ? cp : -tw;
         scene.boxes.push_back(wallBox(T, f, a - cw, a, d0, d1, 0, d.height + cw, Surface::Casing, di));
         scene.boxes.push_back(wallBox(T, f, b, b + cw, d0, d1, 0, d.height + cw, Surface::Casing, di));
@@ -512,6 +512,13 @@ RoomSpec randomRoom(std::uint64_t seed, const RandomSceneOptions& o) {
   // always was for its seed.
   const bool extras = o.clutter || o.partition || o.corridor;
   Rng extra(seed ^ 0x5CE4E0C0FFEEull);
+  if (o.varied_doors) {
+    Rng joinery(seed ^ 0xD00425EEDull);
+    const bool casing = !joinery.coin(1.0 / 3.0);
+    r.casing_width = casing ? joinery.uniform(0.04, 0.10) : 0.0;
+    r.casing_depth = casing ? joinery.uniform(0.008, 0.03) : 0.0;
+    r.leaf_thickness = joinery.uniform(0.03, 0.055);
+  }
   if (o.corridor) {
     r.name = "corridor_" + std::to_string(seed);
     r.width = extra.uniform(6.0, 12.0);
