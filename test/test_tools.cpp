@@ -218,6 +218,44 @@ TEST(Tools, CliRefusesMalformedFilesWithOneLineAndExitTwo) {
   fs::remove_all(dir);
 }
 
+// An output naming an INPUT or another output, or a report or plan named
+// as a cloud (--svg with its file name forgotten before a shell glob takes
+// the first scan), is refused before anything is written: the scan is left
+// as it was.
+TEST(Tools, CliRefusesAnOutputThatIsAnInput) {
+  const fs::path dir = tempDir("cli_overwrite");
+  ASSERT_EQ(run("door_scene_sim --quiet --seed 3 --points 50000 --out " + (dir / "a").string()).code, 0);
+  ASSERT_EQ(run("door_scene_sim --quiet --seed 4 --points 50000 --out " + (dir / "b").string()).code, 0);
+  const std::string a = (dir / "a.pcd").string(), b = (dir / "b.pcd").string();
+  const std::string before = slurp(a);
+  for (const std::string& args : {"--svg " + a + " " + b, "--json " + a + " " + b, "--reconstruction " + b + " " + a + " " + b,
+                                  "--json " + (dir / "o").string() + " --svg " + (dir / "o").string() + " " + a}) {
+    SCOPED_TRACE(args);
+    const Result r = run("door_state_cli " + args, true);
+    EXPECT_EQ(r.code, 2);
+    EXPECT_TRUE(r.out.find("is also an INPUT") != std::string::npos || r.out.find("name the same file") != std::string::npos ||
+                r.out.find("names a point cloud") != std::string::npos)
+        << r.out;
+  }
+  EXPECT_EQ(slurp(a), before);
+  EXPECT_FALSE(fs::exists(dir / "o"));
+  fs::remove_all(dir);
+}
+
+// A report that ends before levelling (nothing usable in the cloud) says the
+// up axis it was given, not +z.
+TEST(Tools, CliEmptyReportKeepsTheGivenUpAxis) {
+  const fs::path dir = tempDir("cli_empty_up");
+  std::ofstream(dir / "nan.pcd") << "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+                                    "WIDTH 2\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\nnan nan nan\nnan nan nan\n";
+  const Result r = run("door_state_cli --quiet --up -y " + (dir / "nan.pcd").string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j["doors"].empty());
+  EXPECT_EQ(j["up"], nlohmann::json::array({0.0, -1.0, 0.0})) << j["up"];
+  fs::remove_all(dir);
+}
+
 TEST(Tools, CliReportHasTheDocumentedShape) {
   const fs::path dir = tempDir("cli_ok");
   ASSERT_EQ(run("door_scene_sim --quiet --seed 8 --points 200000 --out " + (dir / "s").string()).code, 0);

@@ -2,7 +2,9 @@
 // writes the report JSON.
 #include <pcl/io/ply_io.h>
 
+#include <cctype>
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -32,7 +34,8 @@ const char* kUsage = R"(usage: door_state_cli [--config FILE.yaml] [--up +z|-z|+
                       INPUT [INPUT...]
 
 Finds the walls and doors in a point cloud and tells every door's state
-(closed, semi_open, open) and opening angle. INPUT is a PCD (ascii, binary,
+(closed, semi_open, open; not_closed where the doorway is seen through but
+its leaf is not) and opening angle. INPUT is a PCD (ascii, binary,
 binary_compressed) or PLY (ascii, binary) file with at least x, y, z. The
 report (JSON, input frame, metres and degrees) goes to stdout, or to --json.
 
@@ -73,7 +76,9 @@ the inputs one cloud without a viewpoint.
   -h, --help               this text
 
 Every output is opened before any INPUT is read: one that cannot be written
-is refused at once. INPUT must be a file ('-', stdin, is refused).
+is refused at once, as is one that names an INPUT or another output, and a
+--json or --svg path ending in .pcd or .ply (a file name forgotten before a
+glob). INPUT must be a file ('-', stdin, is refused).
 
 exit status: 0 report written (zero doors included; the reconstruction, if
 asked, is written before it); 2 bad arguments (the message and this usage on
@@ -114,6 +119,13 @@ struct Output {
     if (created && !done) std::remove(path.c_str());
   }
 };
+
+// Two paths naming one file: the same inode where both exist, else the same text.
+bool samePath(const std::string& a, const std::string& b) {
+  struct stat sa, sb;
+  if (::stat(a.c_str(), &sa) == 0 && ::stat(b.c_str(), &sb) == 0) return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+  return a == b;
+}
 
 // The reconstruction, or with nothing reconstructed a valid PLY of 0 points
 // (PCL refuses to write an empty cloud) so no earlier file is left behind.
@@ -174,6 +186,28 @@ int main(int argc, char** argv) {
     if (inputs.empty()) throw UsageError("INPUT is missing");
     if (viewpoint_xyz && inputs.size() > 1)
       throw UsageError("--viewpoint X,Y,Z is one position: with several INPUTs give auto, header or none");
+    // An output that is an INPUT or another output would destroy the scan
+    // (`--svg` with its name forgotten takes the first INPUT) or one report.
+    const std::vector<std::pair<std::string, std::string>> outputs = {
+        {"--json", json_out}, {"--reconstruction", recon_out}, {"--svg", svg_out}};
+    for (std::size_t k = 0; k < outputs.size(); ++k) {
+      const auto& [flag, path] = outputs[k];
+      if (path.empty()) continue;
+      // A report or a plan never goes to a cloud's name: a shell glob after
+      // a flag whose file name was forgotten hands it the first scan.
+      std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : "";
+      for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+      if (flag != "--reconstruction" && (ext == ".pcd" || ext == ".ply"))
+        throw UsageError(flag + " " + path + " names a point cloud: it would be overwritten (did " + flag +
+                         " lose its file name?)");
+      for (const std::string& input : inputs)
+        if (samePath(path, input))
+          throw UsageError(flag + " " + path + " is also an INPUT: it would be overwritten (did " + flag +
+                           " lose its file name?)");
+      for (std::size_t j = 0; j < k; ++j)
+        if (!outputs[j].second.empty() && samePath(path, outputs[j].second))
+          throw UsageError(flag + " and " + outputs[j].first + " name the same file " + path);
+    }
   } catch (const UsageError& e) {
     std::cerr << "door_state_cli: " << e.what() << "\n\n" << kUsage;
     return 2;

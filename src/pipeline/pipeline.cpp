@@ -116,6 +116,9 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   Stopwatch watch(&res.timing_ms);
   res.points_in = cloud.size();
   res.viewpoint = viewpoint_in;
+  // The axis given, until levelling has found the one it used (a report
+  // ending before levelling says the axis it was told, not +z).
+  if (const std::optional<Eigen::Vector3d> given = preprocess::parseUpAxis(p.up_axis)) res.up = given->normalized();
   const bool organized = cloud.height > 1;  // a camera frame: no return means nothing in range
   if (const std::optional<std::string> why = implausibleInput(cloud, viewpoint_in)) {
     res.warnings.push_back(*why);
