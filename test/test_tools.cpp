@@ -10,7 +10,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <nlohmann/json.hpp>
+#include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
 #include <pcl/point_types.h>
 #include <rosbag/bag.h>
@@ -239,6 +241,43 @@ TEST(Tools, CliRefusesAnOutputThatIsAnInput) {
   }
   EXPECT_EQ(slurp(a), before);
   EXPECT_FALSE(fs::exists(dir / "o"));
+  fs::remove_all(dir);
+}
+
+// A georeferenced cloud (float64 eastings and northings of 5e5 and 5e6 m,
+// where float32 keeps 6 cm) is read moved near its points and reported in
+// its own frame: the same doors as the cloud at the origin, as near once
+// moved back as the voxel grid's phase allows (a few cm), and a warning.
+TEST(Tools, CliReadsAGeoreferencedCloudToTheMillimetre) {
+  const fs::path dir = tempDir("cli_utm");
+  ASSERT_EQ(run("door_scene_sim --quiet --seed 7 --points 150000 --out " + (dir / "s").string()).code, 0);
+  pcl::PointCloud<pcl::PointXYZ> c;
+  ASSERT_EQ(pcl::io::loadPCDFile((dir / "s.pcd").string(), c), 0);
+  const double dx = 500000.0, dy = 5000000.0, dz = 120.0;
+  {
+    std::ofstream out(dir / "utm.pcd");
+    out << "VERSION .7\nFIELDS x y z\nSIZE 8 8 8\nTYPE F F F\nCOUNT 1 1 1\nWIDTH " << c.size() << "\nHEIGHT 1\n";
+    out << std::fixed << std::setprecision(4) << "VIEWPOINT " << c.sensor_origin_.x() + dx << " " << c.sensor_origin_.y() + dy
+        << " " << c.sensor_origin_.z() + dz << " 1 0 0 0\nPOINTS " << c.size() << "\nDATA ascii\n";
+    for (const auto& p : c.points) out << p.x + dx << " " << p.y + dy << " " << p.z + dz << "\n";
+  }
+  const Result a = run("door_state_cli --quiet " + (dir / "s.pcd").string());
+  const Result b = run("door_state_cli --quiet " + (dir / "utm.pcd").string());
+  ASSERT_EQ(a.code, 0);
+  ASSERT_EQ(b.code, 0) << b.out;
+  const nlohmann::json ja = nlohmann::json::parse(a.out), jb = nlohmann::json::parse(b.out);
+  ASSERT_FALSE(ja["doors"].empty());
+  ASSERT_EQ(ja["doors"].size(), jb["doors"].size());
+  for (std::size_t i = 0; i < ja["doors"].size(); ++i) {
+    const auto &x = ja["doors"][i], &y = jb["doors"][i];
+    EXPECT_EQ(x["state"], y["state"]);
+    EXPECT_NEAR(x["opening_angle_deg"].get<double>(), y["opening_angle_deg"].get<double>(), 2.0);
+    EXPECT_NEAR(y["hinge"][0].get<double>() - dx, x["hinge"][0].get<double>(), 0.05);
+    EXPECT_NEAR(y["hinge"][1].get<double>() - dy, x["hinge"][1].get<double>(), 0.05);
+    EXPECT_NEAR(y["hinge"][2].get<double>() - dz, x["hinge"][2].get<double>(), 0.05);
+  }
+  EXPECT_NEAR(jb["viewpoint"][0].get<double>(), dx + c.sensor_origin_.x(), 0.01);
+  EXPECT_NE(jb["warnings"].dump().find("far from their origin"), std::string::npos) << jb["warnings"];
   fs::remove_all(dir);
 }
 

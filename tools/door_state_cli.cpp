@@ -226,9 +226,14 @@ int main(int argc, char** argv) {
     std::vector<pcl::PointCloud<pcl::PointXYZ>> clouds;
     std::vector<double> read_each_ms;
     std::size_t total = 0;
+    // A georeferenced cloud is read moved near its points (CloudFrame); the
+    // stations of a survey share the first one's shift.
+    std::vector<dsr::io::CloudFrame> frames;
     for (const std::string& input : inputs) {
       const auto t_read = std::chrono::steady_clock::now();
-      clouds.push_back(dsr::io::readCloud(input));
+      frames.emplace_back();
+      if (frames.size() > 1) frames.back().shift = frames.front().shift, frames.back().shift_given = true;
+      clouds.push_back(dsr::io::readCloud(input, &frames.back()));
       // Stations above max_points in all are refused before the next is read.
       total += clouds.back().size();
       if (total > static_cast<std::size_t>(params.max_points))
@@ -241,8 +246,26 @@ int main(int argc, char** argv) {
     // given), from --viewpoint X,Y,Z, or from no known position.
     std::string input = inputs[0];
     std::vector<dsr::Station> stations;
+    const Eigen::Vector3d shift = frames.front().shift;
+    std::vector<std::string> sight_notes;
+    bool without_viewpoint = viewpoint_arg == "none";
+    if (!shift.isZero()) {
+      char at[160];
+      std::snprintf(at, sizeof at, "(%.0f, %.0f, %.0f)", shift.x(), shift.y(), shift.z());
+      sight_notes.push_back(std::string("coordinates lie far from their origin: read moved by -") + at +
+                            " (in double, kept to the millimetre); the report is in the input's frame, " +
+                            "the --reconstruction and --svg in that moved frame");
+      // No VIEWPOINT in a georeferenced file: no sensor stood at its origin.
+      if (viewpoint_arg == "auto" && !viewpoint_xyz &&
+          std::none_of(frames.begin(), frames.end(), [](const dsr::io::CloudFrame& f) { return f.viewpoint_given; })) {
+        without_viewpoint = true;
+        sight_notes.push_back("viewpoint: no VIEWPOINT in a georeferenced cloud; run without a viewpoint");
+      }
+    }
     for (std::size_t k = 0; k < clouds.size(); ++k) {
-      const Eigen::Vector3d vp = viewpoint_xyz ? *viewpoint_xyz : clouds[k].sensor_origin_.head<3>().cast<double>();
+      const Eigen::Vector3d vp = without_viewpoint && !shift.isZero() ? Eigen::Vector3d::Zero()
+                                 : viewpoint_xyz ? Eigen::Vector3d(*viewpoint_xyz - shift)
+                                                 : clouds[k].sensor_origin_.head<3>().cast<double>();
       if (!vp.allFinite() || vp.cwiseAbs().maxCoeff() > params.max_abs_coordinate) {
         if (viewpoint_xyz) throw std::invalid_argument("--viewpoint lies beyond max_abs_coordinate");
         throw dsr::io::CloudReadError(inputs[k] + ": VIEWPOINT lies beyond max_abs_coordinate or is not finite");
@@ -257,8 +280,6 @@ int main(int argc, char** argv) {
       if (!quiet && (clouds.size() > 1 || !vp.isZero()))
         std::cerr << "door_state_cli: station " << k << " at (" << vp.x() << ", " << vp.y() << ", " << vp.z() << ")\n";
     }
-    std::vector<std::string> sight_notes;
-    bool without_viewpoint = viewpoint_arg == "none";
     // A station's points hidden from its VIEWPOINT, where few (its depth
     // edges in a cluttered room), are left out: the rest are its rays.
     std::vector<pcl::PointCloud<pcl::PointXYZ>> seen(clouds.size());
@@ -291,7 +312,14 @@ int main(int argc, char** argv) {
     dsr::PipelineResult result = without_viewpoint ? pipeline.runWithoutViewpoint(*stations[0].cloud, !recon_out.empty())
                                                    : pipeline.runStations(stations, !recon_out.empty());
     result.warnings.insert(result.warnings.begin(), sight_notes.begin(), sight_notes.end());
-    nlohmann::json report = dsr::io::reportJson(result, input);
+    nlohmann::json report;
+    if (shift.isZero()) {
+      report = dsr::io::reportJson(result, input);
+    } else {  // in the input's frame; the plan and the reconstruction stay in the moved one
+      dsr::PipelineResult shown = result;
+      dsr::translate(shown, shift);
+      report = dsr::io::reportJson(shown, input);
+    }
     report["timing_ms"]["read"] = read_ms;
     // The reconstruction before the report: exit 0 always means both were written.
     if (!recon_out.empty()) {

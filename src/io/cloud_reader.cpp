@@ -182,13 +182,31 @@ void forEachRecord(Input& in, u64 count, u64 record_size, Fn fn) {
 }
 
 // Scalar float32/float64 at p, optionally byte-swapped.
-float loadFloat(const char* p, int size, bool swap) {
+double loadDouble(const char* p, int size, bool swap) {
   char b[8];
   std::memcpy(b, p, size);
   if (swap) std::reverse(b, b + size);
   if (size == 4) { float f; std::memcpy(&f, b, 4); return f; }
-  double d; std::memcpy(&d, b, 8); return static_cast<float>(d);
+  double d; std::memcpy(&d, b, 8); return d;
 }
+
+// Points as float, moved by the cloud's shift (CloudFrame): decided on the
+// first finite point unless given, and applied in double before the cast.
+struct Localizer {
+  CloudFrame* frame;
+  bool decided;
+  explicit Localizer(CloudFrame* f) : frame(f), decided(f && f->shift_given) {}
+  pcl::PointXYZ operator()(double x, double y, double z) {
+    if (!frame) return pcl::PointXYZ(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
+    if (!decided && std::isfinite(x) && std::isfinite(y) && std::isfinite(z)) {
+      decided = true;
+      if (std::max({std::abs(x), std::abs(y), std::abs(z)}) > kShiftBeyond)
+        frame->shift = Eigen::Vector3d(std::round(x), std::round(y), std::round(z));
+    }
+    const Eigen::Vector3d& o = frame->shift;
+    return pcl::PointXYZ(static_cast<float>(x - o.x()), static_cast<float>(y - o.y()), static_cast<float>(z - o.z()));
+  }
+};
 
 u64 loadUInt(const char* p, int size, bool swap) {
   unsigned char b[8];
@@ -233,7 +251,7 @@ bool isPcdKeyword(std::string_view k) {
 }
 
 // `line` holds the file's first line, already read.
-pcl::PointCloud<pcl::PointXYZ> readPcd(Input& in, std::string line) {
+pcl::PointCloud<pcl::PointXYZ> readPcd(Input& in, std::string line, Localizer& loc) {
   std::vector<std::string> names, sizes, types, counts;
   std::string width_s, height_s, points_s, data;
   std::vector<double> viewpoint;
@@ -330,6 +348,7 @@ pcl::PointCloud<pcl::PointXYZ> readPcd(Input& in, std::string line) {
   if (width > UINT32_MAX || height > UINT32_MAX) in.fail("WIDTH or HEIGHT does not fit in 32 bits");
 
   pcl::PointCloud<pcl::PointXYZ> cloud;
+  if (loc.frame) loc.frame->viewpoint_given = viewpoint.size() == 7 && (viewpoint[0] != 0 || viewpoint[1] != 0 || viewpoint[2] != 0);
   if (viewpoint.size() == 7) {
     cloud.sensor_origin_ = Eigen::Vector4d(viewpoint[0], viewpoint[1], viewpoint[2], 0.0).cast<float>();
     cloud.sensor_orientation_ =
@@ -361,7 +380,7 @@ pcl::PointCloud<pcl::PointXYZ> readPcd(Input& in, std::string line) {
         for (int a = 0; a < 3; ++a)
           if (xyz.token[a] == k) v[a] = d;
       }
-      cloud.points[row] = pcl::PointXYZ(static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2]));
+      cloud.points[row] = loc(v[0], v[1], v[2]);
       ++row;
     }
   } else if (data == "binary") {
@@ -372,9 +391,9 @@ pcl::PointCloud<pcl::PointXYZ> readPcd(Input& in, std::string line) {
     allocate(cloud, points, width, height);
     std::size_t i = 0;
     forEachRecord(in, points, point_size, [&](const char* r) {
-      cloud.points[i++] = pcl::PointXYZ(loadFloat(r + xyz.offset[0], xyz.size[0], false),
-                                        loadFloat(r + xyz.offset[1], xyz.size[1], false),
-                                        loadFloat(r + xyz.offset[2], xyz.size[2], false));
+      cloud.points[i++] = loc(loadDouble(r + xyz.offset[0], xyz.size[0], false),
+                              loadDouble(r + xyz.offset[1], xyz.size[1], false),
+                              loadDouble(r + xyz.offset[2], xyz.size[2], false));
     });
   } else if (data == "binary_compressed") {
     if (points == 0 && in.remaining() == 0) { allocate(cloud, 0, width, height); return cloud; }
@@ -403,9 +422,9 @@ pcl::PointCloud<pcl::PointXYZ> readPcd(Input& in, std::string line) {
     const char* col[3];
     for (int a = 0; a < 3; ++a) col[a] = raw.data() + xyz.offset[a] * points;
     for (u64 i = 0; i < points; ++i)
-      cloud.points[i] = pcl::PointXYZ(loadFloat(col[0] + i * xyz.size[0], xyz.size[0], false),
-                                      loadFloat(col[1] + i * xyz.size[1], xyz.size[1], false),
-                                      loadFloat(col[2] + i * xyz.size[2], xyz.size[2], false));
+      cloud.points[i] = loc(loadDouble(col[0] + i * xyz.size[0], xyz.size[0], false),
+                            loadDouble(col[1] + i * xyz.size[1], xyz.size[1], false),
+                            loadDouble(col[2] + i * xyz.size[2], xyz.size[2], false));
   } else {
     in.fail("unknown DATA kind " + quote(data) + " (expected ascii, binary or binary_compressed)");
   }
@@ -460,7 +479,7 @@ void skipPlyElement(Input& in, const PlyElement& e, bool ascii, bool swap) {
   }
 }
 
-pcl::PointCloud<pcl::PointXYZ> readPly(Input& in) {
+pcl::PointCloud<pcl::PointXYZ> readPly(Input& in, Localizer& loc) {
   std::string line, format;  // the "ply" line has been read
   std::vector<PlyElement> elems;
   bool ended = false;
@@ -554,7 +573,7 @@ pcl::PointCloud<pcl::PointXYZ> readPly(Input& in) {
         for (int a = 0; a < 3; ++a)
           if (xyz.token[a] == k) val[a] = d;
       }
-      cloud.points[i] = pcl::PointXYZ(static_cast<float>(val[0]), static_cast<float>(val[1]), static_cast<float>(val[2]));
+      cloud.points[i] = loc(val[0], val[1], val[2]);
     }
   } else {
     u64 need = 0;
@@ -564,9 +583,9 @@ pcl::PointCloud<pcl::PointXYZ> readPly(Input& in) {
     allocate(cloud, n, n, 1);
     std::size_t i = 0;
     forEachRecord(in, n, rec, [&](const char* r) {
-      cloud.points[i++] = pcl::PointXYZ(loadFloat(r + xyz.offset[0], xyz.size[0], swap),
-                                        loadFloat(r + xyz.offset[1], xyz.size[1], swap),
-                                        loadFloat(r + xyz.offset[2], xyz.size[2], swap));
+      cloud.points[i++] = loc(loadDouble(r + xyz.offset[0], xyz.size[0], swap),
+                              loadDouble(r + xyz.offset[1], xyz.size[1], swap),
+                              loadDouble(r + xyz.offset[2], xyz.size[2], swap));
     });
   }
   return cloud;
@@ -580,13 +599,17 @@ namespace {
 
 // Reads a cloud from `in`; every error becomes a CloudReadError naming `name`.
 template <typename MakeInput>
-pcl::PointCloud<pcl::PointXYZ> readFrom(const std::string& name, MakeInput make) {
+pcl::PointCloud<pcl::PointXYZ> readFrom(const std::string& name, MakeInput make, CloudFrame* frame) {
   try {
     Input in = make();
     // PLY files start with the line "ply"; anything else is tried as PCD.
     std::string first;
     in.readLine(first);
-    pcl::PointCloud<pcl::PointXYZ> cloud = first == "ply" ? readPly(in) : readPcd(in, first);
+    Localizer loc(frame);
+    pcl::PointCloud<pcl::PointXYZ> cloud = first == "ply" ? readPly(in, loc) : readPcd(in, first, loc);
+    // The VIEWPOINT in the frame the points were moved into (in double).
+    if (frame && !frame->shift.isZero())
+      cloud.sensor_origin_.head<3>() = (cloud.sensor_origin_.head<3>().cast<double>() - frame->shift).cast<float>();
     finish(cloud);
     return cloud;
   } catch (const CloudReadError&) {
@@ -600,12 +623,12 @@ pcl::PointCloud<pcl::PointXYZ> readFrom(const std::string& name, MakeInput make)
 
 }  // namespace
 
-pcl::PointCloud<pcl::PointXYZ> readCloud(const std::string& path) {
-  return readFrom(path, [&] { return Input(path); });
+pcl::PointCloud<pcl::PointXYZ> readCloud(const std::string& path, CloudFrame* frame) {
+  return readFrom(path, [&] { return Input(path); }, frame);
 }
 
 pcl::PointCloud<pcl::PointXYZ> readCloudFromMemory(const void* data, std::size_t size, const std::string& name) {
-  return readFrom(name, [&] { return Input(static_cast<const char*>(data), size, name); });
+  return readFrom(name, [&] { return Input(static_cast<const char*>(data), size, name); }, nullptr);
 }
 
 }}  // namespace dsr::io

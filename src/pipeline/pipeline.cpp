@@ -102,6 +102,24 @@ const char* toString(Swing s) {
   return "unknown";
 }
 
+void translate(PipelineResult& r, const Eigen::Vector3d& o) {
+  for (WallResult& w : r.walls) {
+    for (Eigen::Vector3d& c : w.corners) c += o;
+    w.line_point += o;
+  }
+  for (DoorResult& d : r.doors) {
+    for (Eigen::Vector3d& c : d.leaf_corners) c += o;
+    d.hinge += o, d.opening_center += o, d.wall_line_point += o, d.leaf_line_point += o;
+  }
+  for (SegmentResult& g : r.others)
+    for (Eigen::Vector3d& c : g.corners) c += o;
+  if (r.viewpoint) *r.viewpoint += o;
+  for (Eigen::Vector3d& st : r.stations) st += o;
+  const double along = o.dot(r.up);
+  if (r.floor) *r.floor += along;
+  if (r.ceiling) *r.ceiling += along;
+}
+
 Pipeline::Pipeline(const Parameters& parameters) : params_(parameters) { params_.validate(); }
 
 PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool with_reconstruction,

@@ -1,4 +1,5 @@
 #pragma once
+#include <Eigen/Core>
 #include <stdexcept>
 #include <string>
 #include <pcl/point_cloud.h>
@@ -14,7 +15,19 @@ class CloudReadError : public std::runtime_error { using std::runtime_error::run
 // points as they are (callers filter). Extra fields (rgb, label, normals...)
 // are skipped. x,y,z may be float32 or float64 (converted to float); any
 // other type for x/y/z is an error. Throws CloudReadError on anything wrong.
-pcl::PointCloud<pcl::PointXYZ> readCloud(const std::string& path);
+// Georeferenced clouds (UTM eastings of 1e5-1e6 m) hold coordinates that
+// float32 cannot keep to a millimetre. Given a CloudFrame, a cloud whose
+// first finite point lies beyond kShiftBeyond from the origin is moved by
+// `shift` (that point, to the metre; or the one given, shift_given: the
+// stations of one survey share it), subtracted in double before the cast;
+// its VIEWPOINT is moved too. Add `shift` back to what is found.
+constexpr double kShiftBeyond = 1000.0;
+struct CloudFrame {
+  Eigen::Vector3d shift = Eigen::Vector3d::Zero();
+  bool shift_given = false;
+  bool viewpoint_given = false;  // the header's VIEWPOINT is present and not the origin
+};
+pcl::PointCloud<pcl::PointXYZ> readCloud(const std::string& path, CloudFrame* frame = nullptr);
 // The same from `size` bytes in memory (a file's content); `name` stands for
 // the path in error messages. Used by the fuzz target; nothing is copied.
 pcl::PointCloud<pcl::PointXYZ> readCloudFromMemory(const void* data, std::size_t size,

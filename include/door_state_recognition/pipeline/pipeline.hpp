@@ -137,6 +137,12 @@ struct PipelineResult {
   pcl::PointCloud<pcl::PointXYZL> reconstruction;
 };
 
+// Moves every position of a result by `offset` (walls, doors, leaves, other
+// segments, lines, viewpoint and stations; floor and ceiling heights along
+// `up`): a cloud read in a frame moved near its points (io::CloudFrame)
+// reported in its own. The reconstruction cloud (float) is left as it is.
+void translate(PipelineResult& result, const Eigen::Vector3d& offset);
+
 // One scan position of a survey: its scan, in the frame every station of the
 // survey shares, and where the scanner stood in that frame.
 struct Station {
