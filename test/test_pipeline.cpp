@@ -1326,6 +1326,38 @@ TEST(DoorState, APlaneThroughAShelfUnitsContentsIsNoLeaf) {
   EXPECT_EQ(unseen, 1) << "the leaf out of sight";
 }
 
+// A plain opening, no trim about it (door_scene_sim --varied-doors): its
+// face absent over all of it, rays passing its plane in part and ending just
+// behind it elsewhere (the reveal of a thick wall, a leaf swung away seen
+// only near its hinge). It is a doorway beyond doubt: a leaf seen in part
+// is measured at the doorway's width (seed 1028: a leaf hinged 18 cm deep in
+// its wall, 55 deg, was refused as too narrow), and a leaf swung away past
+// its hinge jamb, seen as a strip behind the wall, is no recess's back
+// (seed 1009: a leaf at 124 deg, no door reported; now a bound).
+TEST(DoorState, APlainOpeningWithoutTrimIsADoorwayBeyondDoubt) {
+  for (const auto& [seed, door] : {std::pair<std::uint64_t, int>{1028, 0}, {1009, 1}}) {
+    sim::RandomSceneOptions ro;
+    ro.varied_doors = true;
+    const sim::RoomSpec spec = sim::randomRoom(seed, ro);
+    ASSERT_EQ(spec.casing_width, 0.0) << "seed=" << seed << ": a room without trim";
+    const sim::Scene scene = sim::buildScene(spec);
+    sim::TlsOptions o;
+    o.seed = seed;
+    const Scored s = runAndScore(scene, sim::scanTls(scene, o), Parameters{});
+    SCOPED_TRACE(::testing::Message() << "seed=" << seed << " varied doors " << describe(s) << trace(s));
+    const eval::DoorMatch* m = matchOf(s, door);
+    ASSERT_NE(m, nullptr) << "door " << door << " found";
+    const DoorResult& d = s.result.doors.at(static_cast<std::size_t>(m->report_index));
+    const double angle = s.truth["doors"][door]["opening_angle_deg"].get<double>();
+    if (d.angle_is_lower_bound) {
+      EXPECT_LE(d.opening_angle_deg, angle + 2.0) << "a bound from below";
+    } else {
+      EXPECT_NEAR(d.opening_angle_deg, angle, 3.0) << "a leaf measured";
+      EXPECT_NEAR(d.width, s.truth["doors"][door]["width"].get<double>(), 0.1);
+    }
+  }
+}
+
 // ----------------------------------------------------------------- stations
 
 // A survey of one simulated room from `stations` scan positions, each

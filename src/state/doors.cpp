@@ -233,9 +233,12 @@ double depthBeyond(const segmentation::Points& pts, const segmentation::WallPlan
     const double s_wall = vs + t * (wall.along(q) - vs), z_wall = vz + t * (q.z() - vz) - floor_z;
     if (s_wall <= d.s0 + 0.05 || s_wall >= d.s1 - 0.05 || z_wall < 0.3 || z_wall > 1.75) continue;
     depth.push_back(-dd);
-    // (the jambs' reveals, square to the wall at the doorway's edges, are no back)
+    // (the jambs' reveals, square to the wall at the doorway's edges, are no
+    // back; nor is what lies beyond a jamb's line, behind the wall beside the
+    // doorway: a recess's back spans the gap between its sides, while a leaf
+    // swung away past its hinge jamb shows only a strip there)
     const double s_own = wall.along(q);
-    if (back && std::abs(s_own - d.s0) >= kRevealBand && std::abs(s_own - d.s1) >= kRevealBand) inside.push_back(-dd);
+    if (back && s_own >= d.s0 + kRevealBand && s_own <= d.s1 - kRevealBand) inside.push_back(-dd);
   }
   if (depth.size() < kBeyondMinPoints) return std::numeric_limits<double>::quiet_NaN();
   std::nth_element(depth.begin(), depth.begin() + depth.size() / 2, depth.end());
@@ -500,7 +503,7 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       door.state = open_unseen ? stateOfBound(leaf.angle_deg, p) : classify(leaf.angle_deg, p);
       // Confidence: how much of the leaf was seen, and how sure the doorway is.
       door.confidence = open_unseen ? kUnseenLeafConfidence
-                                    : std::min(1.0, leaf.coverage) * (d.casing || d.through >= 0.4 ? 1.0 : 0.7);
+                                    : std::min(1.0, leaf.coverage) * (d.sure() ? 1.0 : 0.7);
       door.swing = open_unseen ? Swing::Unknown : leaf.toward_viewer ? Swing::TowardViewer : Swing::AwayFromViewer;
       const Eigen::Vector2d n2 = leaf.toward_viewer ? wall.normal : Eigen::Vector2d(-wall.normal);
       door.wall_normal = toInput(Eigen::Vector3d(n2.x(), n2.y(), 0));

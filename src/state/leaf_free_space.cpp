@@ -62,7 +62,7 @@ class RangeImage {
 }  // namespace
 
 void LeafSearch::freeSpaceBound() {
-  if (!fit.found && (door.casing || door.through >= 0.4) && band_cov < 0.3) {
+  if (!fit.found && door.sure() && band_cov < 0.3) {
     // No leaf seen in a doorway beyond doubt, and none closed in it: where
     // could a leaf of the doorway's width stand without blocking a ray that
     // went through (free space)? For each hinge and swing side, the least

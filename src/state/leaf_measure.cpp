@@ -118,7 +118,7 @@ void LeafSearch::measureLeaf() {
     const double cov = support(s_h, angle, len, -tol, lt + tol, &inl, nullptr);
     // A doorway beyond doubt (trim, or the room beyond seen through it) takes
     // a leaf seen only edge-on or in part, as long as no ray contradicts it.
-    const bool sure_doorway = door.casing || door.through >= 0.4;
+    const bool sure_doorway = door.sure();
     // A leaf cut by the edge of a camera's view: its share of cells inside
     // the view holding points (as above, relaxed in a doorway beyond doubt),
     // where at least a quarter of it is inside.
@@ -157,7 +157,7 @@ void LeafSearch::measureLeaf() {
   // An open leaf seen only in part (cut by the edge of a camera's view, or
   // hidden in part) is shorter than any door; a doorway seen through from
   // jamb to jamb gives the door's width instead.
-  if (fit.found && !fit.closed_in_band && fit.length < p.door_min_width && door.through >= 0.4) {
+  if (fit.found && !fit.closed_in_band && fit.length < p.door_min_width && door.sure()) {
     const double span = std::abs(s_other - s_h);
     if (span >= p.door_min_width && span <= p.door_max_width) fit.s_latch = s_other;
   }

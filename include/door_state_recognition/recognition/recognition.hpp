@@ -56,6 +56,19 @@ struct Doorway {
   // leaf, hiding it, can make it a door (no trim is snapped to it).
   bool shadow_end = false;
   double width() const { return s1 - s0; }
+  // A doorway beyond doubt, not a niche or a closed leaf: trim frames it,
+  // or rays pass its plane over much of it, or, in a plain opening without
+  // trim, the wall's face is absent over all of it and rays pass the plane
+  // somewhere while the rest ends just behind it (the reveal, a leaf swung
+  // away seen near its hinge). A niche's back or a closed leaf lets no ray
+  // through. Such a doorway takes a leaf seen only in part (its length the
+  // doorway's), and bounds an unseen one by free space.
+  bool sure() const {
+    return casing || through >= kSureThrough ||
+           (face < kPlainOpeningFace && through >= kPlainOpeningThrough && through + recess >= kPlainOpeningSeen);
+  }
+  static constexpr double kSureThrough = 0.4, kPlainOpeningFace = 0.05, kPlainOpeningThrough = 0.1,
+                          kPlainOpeningSeen = 0.8;
 };
 
 // Evidence grid over the wall plane (cells of grid_cell along the wall,
