@@ -165,6 +165,38 @@ TEST(Sight, AnOrganizedCloudIsItsSensorsOwn) {
   EXPECT_TRUE(sight::checkViewpoint(frame, Eigen::Vector3d::Zero(), p).credible);
 }
 
+// An organized cloud moved out of its sensor's frame with its VIEWPOINT left
+// at 0 (a camera frame or a LiDAR sweep moved into base_link): its pixels'
+// rays no longer meet there. Where they do meet is found (a camera's rows
+// and columns, a LiDAR's columns are planes through the sensor; a LiDAR's
+// rings cones about its axis), to the centimetre.
+TEST(Sight, AnOrganizedCloudMovedOutOfItsSensorsFrameIsSeenFromWhereItsRaysMeet) {
+  Parameters p;
+  const Eigen::Vector3d shift(0.3, -1.2, 0.8);
+  auto moved = [&](pcl::PointCloud<pcl::PointXYZ> c) {
+    for (auto& q : c.points)
+      if (q.getVector3fMap().allFinite()) q.getVector3fMap() += shift.cast<float>();
+    return c;
+  };
+  const sim::Scene scene = sim::buildScene(sim::randomRoom(3100));
+  sim::RgbdOptions ro;
+  ro.seed = 3100;
+  const pcl::PointCloud<pcl::PointXYZ> frame = xyz(sim::captureRgbd(scene, ro).cloud);
+  sim::LidarOptions lo = sim::LidarOptions::preset(16);
+  lo.seed = 3100;
+  const pcl::PointCloud<pcl::PointXYZ> sweep = xyz(sim::scanLidar(scene, lo).cloud);
+  for (const auto* c : {&frame, &sweep}) {
+    SCOPED_TRACE(c == &frame ? "seed=3100 RGB-D frame" : "seed=3100 16-beam sweep");
+    const sight::ViewpointCheck own = sight::checkViewpoint(*c, Eigen::Vector3d::Zero(), p);
+    EXPECT_TRUE(own.credible) << own.reason;
+    EXPECT_FALSE(own.rays_meet);
+    const sight::ViewpointCheck away = sight::checkViewpoint(moved(*c), Eigen::Vector3d::Zero(), p);
+    EXPECT_FALSE(away.credible) << away.reason;
+    ASSERT_TRUE(away.rays_meet) << away.reason;
+    EXPECT_LT((*away.rays_meet - shift).norm(), 0.01) << away.rays_meet->transpose();
+  }
+}
+
 // preprocess::raySpacing: a depth camera's pixels lie 1/f rad apart (f =
 // 525 px at 640x480), a rotating LiDAR's rings 45/63 deg (64 beams over
 // +-22.5 deg) or 2 deg (16 beams over +-15 deg), its columns closer.

@@ -41,9 +41,10 @@ report (JSON, input frame, metres and degrees) goes to stdout, or to --json.
 
 Free space is told by rays from where the sensor stood (--viewpoint). By
 default (auto) that is the PCD header's VIEWPOINT (the origin where there is
-none, and for a PLY) when it is credible for the cloud: an organized cloud,
-or one in which almost no point lies behind another surface seen from there,
-as for one sensor's scan. A registered room, stations merged into one cloud,
+none, and for a PLY) when it is credible for the cloud: an organized cloud
+whose pixels' rays meet there (one moved out of its sensor's frame is seen
+from where they do meet), or one in which almost no point lies behind
+another surface seen from there, as for one sensor's scan. A registered room, stations merged into one cloud,
 a map or a mesh export is not: its stations are then inferred from the
 cloud's own surfaces (positions from which they are seen) and run as a
 survey. The report's "viewpoint" says which was used ([x, y, z], or null
@@ -290,7 +291,11 @@ int main(int argc, char** argv) {
         const Eigen::Vector3d& vp = stations[k].viewpoint;
         char at[120];
         std::snprintf(at, sizeof at, "(%.3g, %.3g, %.3g)", vp.x(), vp.y(), vp.z());
-        if (check.take_visible) {
+        if (check.rays_meet) {  // an organized frame moved out of its sensor's frame: seen from its sensor
+          stations[k].viewpoint = *check.rays_meet;
+          sight_notes.push_back("viewpoint: " + inputs[k] + "'s VIEWPOINT " + at + ": " + check.reason +
+                                "; taken where they meet");
+        } else if (check.take_visible) {
           sight_notes.push_back("viewpoint: " + inputs[k] + "'s VIEWPOINT " + at + " taken, the " +
                                 std::to_string(clouds[k].size() - seen[k].size()) +
                                 " points hidden from it left out: " + check.reason);

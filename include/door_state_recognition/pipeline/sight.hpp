@@ -27,6 +27,7 @@
 
 #include <Eigen/Core>
 #include <string>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -43,6 +44,10 @@ struct ViewpointCheck {
   double hidden_share = 0;  // of the points tested, those behind another surface seen from the viewpoint
   std::size_t tested = 0;
   std::string reason;       // why (for the report's warnings)
+  // An organized cloud whose pixels' rays do not meet at the viewpoint but
+  // at this point (a frame moved into another frame with its VIEWPOINT left
+  // behind): where its sensor was; credible there.
+  std::optional<Eigen::Vector3d> rays_meet;
 };
 
 // A point of a single scan lies behind another surface seen from its own
@@ -58,7 +63,9 @@ constexpr double kTakeVisibleUpTo = 0.05;
 
 // Whether `viewpoint` is where one sensor stood that saw this whole cloud.
 // An organized cloud (height > 1: a camera frame or a LiDAR's rings) is one
-// sensor's by construction and is taken as credible without a test.
+// sensor's by construction: credible where its pixels' rays meet (the
+// angles between neighbouring pixels' rays alike along its rows); where
+// they meet elsewhere, that point is given in rays_meet.
 // With `visible` and take_visible: the cloud's points not hidden from the
 // viewpoint.
 ViewpointCheck checkViewpoint(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vector3d& viewpoint,
