@@ -60,6 +60,10 @@ TEST(Tools, HelpExitsZeroAndWrongArgumentsExitTwo) {
     EXPECT_NE(help.out.find("usage"), std::string::npos);
     EXPECT_EQ(run(exe + " --no-such-flag").code, 2);
   }
+  // An option given twice, or an empty axis, is a usage error (the last
+  // silently won, an empty axis was +z).
+  EXPECT_EQ(run("door_state_cli --json a.json --json b.json x.pcd").code, 2);
+  EXPECT_EQ(run("door_state_cli --up '' x.pcd").code, 2);
   EXPECT_EQ(run("door_scene_sim").code, 2);                                   // no --out
   EXPECT_EQ(run("door_scene_sim --out /tmp/x --points many").code, 2);        // not a number
   EXPECT_EQ(run("door_scene_sim --out /tmp/x --sensor sonar").code, 2);       // unknown sensor

@@ -151,6 +151,11 @@ int main(int argc, char** argv) {
   std::optional<Eigen::Vector3d> viewpoint_xyz;
   std::vector<std::string> inputs;
   bool quiet = false, verbose = false;
+  // An option given twice: which one was meant? (the last silently won)
+  auto once = [](const std::string& flag, const std::string& before, const std::string& now) {
+    if (!before.empty()) throw UsageError(flag + " given twice ('" + before + "', '" + now + "')");
+    return now;
+  };
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
@@ -158,8 +163,11 @@ int main(int argc, char** argv) {
       if (a == "-h" || a == "--help") {
         std::cout << kUsage;
         return 0;
-      } else if (a == "--config") config = value();
-      else if (a == "--up") up = value();
+      } else if (a == "--config") config = once(a, config, value());
+      else if (a == "--up") {
+        up = once(a, up, value());
+        if (up.empty()) throw UsageError("--up needs an axis (+z, -z, +y, -y, +x, -x or auto), got ''");
+      }
       else if (a == "--viewpoint") {
         viewpoint_arg = value();
         if (viewpoint_arg != "auto" && viewpoint_arg != "header" && viewpoint_arg != "none") {
@@ -175,9 +183,9 @@ int main(int argc, char** argv) {
           viewpoint_xyz = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
         }
       }
-      else if (a == "--json") json_out = value();
-      else if (a == "--reconstruction") recon_out = value();
-      else if (a == "--svg") svg_out = value();
+      else if (a == "--json") json_out = once(a, json_out, value());
+      else if (a == "--reconstruction") recon_out = once(a, recon_out, value());
+      else if (a == "--svg") svg_out = once(a, svg_out, value());
       else if (a == "--quiet") quiet = true;
       else if (a == "--verbose") verbose = true;
       else if (a == "-") throw UsageError("INPUT '-': reading a cloud from stdin is not supported; give a file");
