@@ -44,10 +44,10 @@ default (auto) that is the PCD header's VIEWPOINT (the origin where there is
 none, and for a PLY) when it is credible for the cloud: an organized cloud
 whose pixels' rays meet there (one moved out of its sensor's frame is seen
 from where they do meet), or one in which almost no point lies behind
-another surface seen from there, as for one sensor's scan. A registered room, stations merged into one cloud,
-a map or a mesh export is not: its stations are then inferred from the
-cloud's own surfaces (positions from which they are seen) and run as a
-survey. The report's "viewpoint" says which was used ([x, y, z], or null
+another surface seen from there, as for one sensor's scan. A registered
+room, stations merged into one cloud, a map or a mesh export is not: its
+stations are then inferred from the cloud's own surfaces (positions from
+which they are seen) and run as a survey. The report's "viewpoint" says which was used ([x, y, z], or null
 with the inferred "stations"), and "warnings" why.
 
 Several INPUTs are the stations of one survey: scans from several scanner
