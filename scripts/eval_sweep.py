@@ -5,7 +5,7 @@ the merged figures as JSON (plus one line per scene with --verbose).
 
   scripts/eval_sweep.py [--sensor tls|rgbd|lidar16|lidar32|lidar64|lidar128] [--scenes N] [--first-seed S]
                         [--points N] [--viewpoints K] [--beyond-doors] [--no-handles] [--up AXIS] [--config FILE] [--jobs J]
-                        [--merge] [--mesh-like N] [--clutter] [--partition] [--corridor]
+                        [--merge] [--mesh-like N] [--voxel-map RES] [--clutter] [--partition] [--corridor]
                         [--varied-doors]
                         [--depth-model M] [--robot-camera] [--verbose] [--out DIR]
 
@@ -26,9 +26,10 @@ def one(args, seed, out):
            "--out", str(prefix), "--formats", "pcd,json"] + (["--no-handles"] if args.no_handles else [])
     sim += [f"--{k}" for k in ("clutter", "partition", "corridor") if getattr(args, k)]
     sim += ["--varied-doors"] if args.varied_doors else []
-    merged = args.merge or args.mesh_like > 0
+    merged = args.merge or args.mesh_like > 0 or args.voxel_map > 0
     sim += ["--merge"] if args.merge else []
     sim += ["--mesh-like", str(args.mesh_like)] if args.mesh_like > 0 else []
+    sim += ["--voxel-map", str(args.voxel_map)] if args.voxel_map > 0 else []
     if args.sensor == "rgbd":
         sim += ["--depth-model", args.depth_model] if args.depth_model else []
         sim += ["--robot-camera"] if args.robot_camera else []
@@ -65,6 +66,8 @@ def main():
     ap.add_argument("--no-handles", action="store_true", help="leaves without handles (door_scene_sim --no-handles)")
     ap.add_argument("--merge", action="store_true",
                     help="TLS: the stations merged into one cloud in frame map (door_scene_sim --merge), one CLI input")
+    ap.add_argument("--voxel-map", type=float, default=0, metavar="RES",
+                    help="TLS: the merged cloud as occupied voxel centres of RES m (door_scene_sim --voxel-map RES)")
     ap.add_argument("--mesh-like", type=int, default=0, metavar="N",
                     help="TLS: the merged cloud resampled as N mesh vertices (door_scene_sim --mesh-like N)")
     ap.add_argument("--clutter", action="store_true", help="random rooms with clutter (door_scene_sim --clutter)")
@@ -81,8 +84,8 @@ def main():
     ap.add_argument("--verbose", action="store_true")
     ap.add_argument("--out", default=None)
     args = ap.parse_args()
-    if args.sensor != "tls" and (args.beyond_doors or args.viewpoints != 1 or args.merge or args.mesh_like):
-        ap.error("--beyond-doors, --viewpoints, --merge and --mesh-like are for --sensor tls")
+    if args.sensor != "tls" and (args.beyond_doors or args.viewpoints != 1 or args.merge or args.mesh_like or args.voxel_map):
+        ap.error("--beyond-doors, --viewpoints, --merge, --mesh-like and --voxel-map are for --sensor tls")
     if args.sensor != "rgbd" and (args.depth_model or args.robot_camera):
         ap.error("--depth-model and --robot-camera are for --sensor rgbd")
     out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="dsr_sweep_"))
@@ -127,7 +130,7 @@ def main():
         summary.update(depth_model=args.depth_model or "default", robot_camera=args.robot_camera)
     if args.sensor == "tls":
         summary.update(points=args.points, viewpoints=args.viewpoints, beyond_doors=args.beyond_doors,
-                       merge=args.merge, mesh_like=args.mesh_like)
+                       merge=args.merge, mesh_like=args.mesh_like, voxel_map=args.voxel_map)
     summary.update({k: True for k in ("clutter", "partition", "corridor", "varied_doors") if getattr(args, k)})
     print(json.dumps(summary, indent=1))
 

@@ -25,7 +25,9 @@ leaf only when it is surely open, as before issue 20).
 Registered clouds (issue 19; not in DEFAULT): merged2-400k-SEED and
 merged3-400k-SEED (2 or 3 stations, 400k rays in all, merged into ONE cloud in
 frame map with VIEWPOINT 0 0 0; the CLI gets that one file), mesh40k-SEED
-(3 stations merged, then resampled as 40k mesh-like vertices). -clutter-,
+(3 stations merged, then resampled as 40k mesh-like vertices), voxmap5cm-SEED
+(3 stations merged, then the centres of occupied 5 cm voxels, as an
+OctoMap or voxel SLAM map exports it). -clutter-,
 -partition- or -corridor- before the seed give the random rooms those options
 (e.g. merged3-400k-clutter-SEED, tls-400k-clutter-SEED); -varied- before
 the seed varies the door joinery (door_scene_sim --varied-doors: a third of
@@ -65,6 +67,9 @@ def sweep_args(name, config_dir):
     elif parts[0] in ("merged2", "merged3"):  # stations merged into one cloud: the rays in total
         args = ["--sensor", "tls", "--viewpoints", parts[0][-1], "--merge", "--points", str(RAYS[parts[1]]),
                 "--first-seed", seed]
+    elif parts[0].startswith("voxmap"):  # voxmap5cm: 3 stations of 400k rays in all, merged, occupied 5 cm voxels
+        args = ["--sensor", "tls", "--viewpoints", "3", "--points", "400000",
+                "--voxel-map", str(int(parts[0][len("voxmap"):-2]) / 100), "--first-seed", seed]
     elif parts[0].startswith("mesh"):  # mesh40k: 3 stations of 400k rays in all, merged, 40k vertices
         args = ["--sensor", "tls", "--viewpoints", "3", "--points", "400000",
                 "--mesh-like", str(int(parts[0][len("mesh"):-1]) * 1000), "--first-seed", seed]

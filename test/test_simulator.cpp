@@ -4,6 +4,8 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <set>
+#include <tuple>
 #include <cmath>
 #include <functional>
 
@@ -701,6 +703,42 @@ TEST(Registered, MergedCloudHoldsEveryStationInAMapFrameWithViewpointZero) {
     EXPECT_EQ(first.cloud[100].x, scan.cloud[100].x);
   }
   EXPECT_THROW(mergedFrameFromString("world"), std::invalid_argument);
+}
+
+// --voxel-map: the centre of every occupied voxel once, nothing else, each
+// with a label of the voxel's points.
+TEST(Registered, VoxelMapHoldsOneCentrePerOccupiedVoxel) {
+  const std::uint64_t seed = 41;
+  const Scene scene = buildScene(randomRoom(seed));
+  TlsOptions o;
+  o.seed = seed;
+  o.points = 60000;
+  o.viewpoints = 2;
+  const SimulatedCloud merged = mergeStations(scene, scanTls(scene, o), {MergedFrame::Map, seed});
+  const double res = 0.05;
+  const SimulatedCloud map = voxelMap(merged, res);
+  SCOPED_TRACE(seedTrace(seed));
+  ASSERT_GT(map.cloud.size(), 1000u);
+  EXPECT_LT(map.cloud.size(), merged.cloud.size());
+  std::set<std::tuple<long, long, long>> cells;
+  for (const auto& q : map.cloud.points) {
+    const double fx = q.x / res - std::floor(q.x / res), fy = q.y / res - std::floor(q.y / res),
+                 fz = q.z / res - std::floor(q.z / res);
+    EXPECT_NEAR(fx, 0.5, 1e-3);
+    EXPECT_NEAR(fy, 0.5, 1e-3);
+    EXPECT_NEAR(fz, 0.5, 1e-3);
+    EXPECT_TRUE(cells.insert({std::lround(std::floor(q.x / res)), std::lround(std::floor(q.y / res)),
+                              std::lround(std::floor(q.z / res))}).second);
+  }
+  std::size_t occupied = 0;
+  {
+    std::set<std::tuple<long, long, long>> all;
+    for (const auto& q : merged.cloud.points)
+      all.insert({std::lround(std::floor(q.x / res)), std::lround(std::floor(q.y / res)), std::lround(std::floor(q.z / res))});
+    occupied = all.size();
+  }
+  EXPECT_EQ(map.cloud.size(), occupied);
+  EXPECT_THROW(voxelMap(merged, 0.001), std::invalid_argument);
 }
 
 TEST(Registered, MeshLikeCloudHasTheCountSpacingHolesAndRoundedCorners) {

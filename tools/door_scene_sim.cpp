@@ -90,6 +90,9 @@ options:
   --mesh-like N          TLS: the merged cloud resampled as about N vertices of a
                          reconstructed mesh (Poisson-disk spacing, holes, rounded
                          corners, 2 mm noise); implies --merge; no station files
+  --voxel-map RES        TLS: the merged cloud as an occupancy map exports it (OctoMap,
+                         a voxel SLAM map): the centre of every occupied RES-metre
+                         voxel; implies --merge; no station files
   --clutter              random room: desks with chairs, bookcases, shelves and
                          cupboards against the walls beside doors (0-30 cm from
                          the casing) and between them, a window-like gap with a
@@ -162,6 +165,7 @@ int main(int argc, char** argv) {
   bool merge = false;
   std::string merged_frame;
   long long mesh_vertices = 0;
+  double voxel_map = 0;
   bool drive = false, zeros = false, sensor_given = false, formats_given = false;
   std::optional<double> mount_height, lidar_noise, lidar_dropout;
   sim::DriveOptions drive_options;
@@ -259,6 +263,10 @@ int main(int argc, char** argv) {
       else if (a == "--mesh-like") {
         mesh_vertices = toInt(a, value());
         if (mesh_vertices < 100 || mesh_vertices > 10000000) throw UsageError("--mesh-like must lie in [100, 1e7]");
+        merge = true;
+      } else if (a == "--voxel-map") {
+        voxel_map = toDouble(a, value());
+        if (!(voxel_map >= 0.01 && voxel_map <= 0.5)) throw UsageError("--voxel-map must lie in [0.01, 0.5] m");
         merge = true;
       } else if (a == "--clutter") random_options.clutter = true;
       else if (a == "--partition") random_options.partition = true;
@@ -405,6 +413,7 @@ int main(int argc, char** argv) {
       mesh.seed = seed;
       cloud = sim::meshLike(cloud, mesh);
     }
+    if (voxel_map > 0) cloud = sim::voxelMap(cloud, voxel_map);
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_start).count();
 
     if (fmt.count("pcd") && pcl::io::savePCDFileBinary(out + ".pcd", cloud.cloud) != 0)
@@ -412,7 +421,7 @@ int main(int argc, char** argv) {
     // Several scan positions: each one's scan on its own too, in the same
     // frame, its position in the PCD's VIEWPOINT (as a survey's registered
     // stations come), for door_state_cli's multi-station input.
-    if (fmt.count("pcd") && cloud.viewpoints_world.size() > 1 && mesh_vertices == 0) {
+    if (fmt.count("pcd") && cloud.viewpoints_world.size() > 1 && mesh_vertices == 0 && voxel_map == 0) {
       const Eigen::Isometry3d world_to_cloud = cloud.sensor_to_world.inverse();
       for (std::size_t k = 0; k < cloud.viewpoints_world.size(); ++k) {
         pcl::PointCloud<pcl::PointXYZL> part;

@@ -100,6 +100,32 @@ SimulatedCloud mergeStations(const Scene& scene, const SimulatedCloud& scan, con
   return out;
 }
 
+SimulatedCloud voxelMap(const SimulatedCloud& in, double res) {
+  require(res >= 0.01 && res <= 0.5, "voxel map resolution must lie in [0.01, 0.5] m");
+  std::unordered_map<std::uint64_t, std::size_t> seen;  // voxel key -> index in the output
+  SimulatedCloud out = in;
+  out.cloud.clear();
+  out.station.clear();
+  for (std::size_t i = 0; i < in.cloud.size(); ++i) {
+    const pcl::PointXYZL& q = in.cloud.points[i];
+    if (!q.getVector3fMap().allFinite()) continue;
+    const auto cell = [&](float v) { return static_cast<std::int64_t>(std::floor(v / res)); };
+    const std::int64_t x = cell(q.x), y = cell(q.y), z = cell(q.z);
+    const std::uint64_t key = (static_cast<std::uint64_t>(x & 0x1FFFFF) << 42) |
+                              (static_cast<std::uint64_t>(y & 0x1FFFFF) << 21) | static_cast<std::uint64_t>(z & 0x1FFFFF);
+    if (!seen.emplace(key, out.cloud.size()).second) continue;
+    pcl::PointXYZL c;
+    c.x = static_cast<float>((x + 0.5) * res), c.y = static_cast<float>((y + 0.5) * res), c.z = static_cast<float>((z + 0.5) * res);
+    c.label = q.label;
+    out.cloud.push_back(c);
+    if (i < in.station.size()) out.station.push_back(in.station[i]);
+  }
+  out.cloud.width = static_cast<std::uint32_t>(out.cloud.size());
+  out.cloud.height = 1;
+  out.cloud.sensor_origin_.setZero();
+  return out;
+}
+
 SimulatedCloud meshLike(const SimulatedCloud& in, const MeshLikeOptions& o) {
   require(o.vertices >= 100 && o.vertices <= 10000000, "mesh-like vertices must lie in [100, 1e7]");
   require(o.hole_fraction >= 0 && o.hole_fraction < 0.5, "hole fraction must lie in [0, 0.5)");

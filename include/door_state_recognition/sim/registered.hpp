@@ -59,6 +59,13 @@ struct MeshLikeOptions {
 // cloud with fewer points than asked for.
 SimulatedCloud meshLike(const SimulatedCloud& cloud, const MeshLikeOptions& options);
 
+// The cloud as an occupancy map exports it (OctoMap, a voxel SLAM map): the
+// centre of every voxel of edge `resolution` holding a point, nothing else.
+// Same frame, VIEWPOINT zero; each centre keeps the label and station of the
+// voxel's first point. Throws std::invalid_argument for a resolution outside
+// [0.01, 0.5] m.
+SimulatedCloud voxelMap(const SimulatedCloud& cloud, double resolution);
+
 // Median distance from a point to its nearest neighbour (0 below 2 points).
 double medianSpacing(const pcl::PointCloud<pcl::PointXYZL>& cloud);
 
