@@ -17,6 +17,7 @@
 #include "door_state_recognition/sim/drive.hpp"
 #include "door_state_recognition/sim/lidar.hpp"
 #include "door_state_recognition/sim/ground_truth.hpp"
+#include "door_state_recognition/sim/registered.hpp"
 #include "door_state_recognition/sim/scene.hpp"
 #include "door_state_recognition/sim/sensors.hpp"
 #include "xyz_cloud.hpp"
@@ -342,6 +343,34 @@ TEST(Sight, TheSideOfATableIsNoJamb) {
     const std::string where = "drive 1077 frame " + std::to_string(i);
     EXPECT_EQ(doorsAtTrueDoors(c, where), 2) << where << ": the two doors in view" << doors(c.result);
   }
+}
+
+// An occupancy map's export (OctoMap, a voxel SLAM map): the centres of
+// occupied 10 cm voxels, nothing else. Neighbourhoods sized in 2 cm voxels
+// held no surface (0 walls, 0 doors on every room); the voxel size now
+// follows a cloud sparser than 2.4 voxels (half its spacing) and says so.
+TEST(Sight, AnOccupancyMapsVoxelCentresGetTheirDoors) {
+  const Pipeline pipe{Parameters()};
+  std::vector<eval::EvalResult> all;
+  std::ostringstream log;
+  for (std::uint64_t seed = 3200; seed < 3204; ++seed) {
+    const Merged m = merged(seed, 3, 150000);
+    const sim::SimulatedCloud map = sim::voxelMap(m.sim, 0.1);
+    const pcl::PointCloud<pcl::PointXYZ> cloud = xyz(map.cloud);
+    const PipelineResult r = pipe.runWithoutViewpoint(cloud, false);
+    const eval::EvalResult e = m.score(r);
+    log << "seed " << seed << ": " << cloud.size() << " voxel centres, " << r.walls.size() << " walls, matched "
+        << e.matched << "/" << e.true_doors << " reported" << doors(r) << "\n";
+    bool said = false;
+    for (const std::string& w : r.warnings) said |= w.find("sparse cloud") != std::string::npos;
+    EXPECT_TRUE(said) << "seed " << seed;
+    EXPECT_GE(r.walls.size(), 1u) << "seed " << seed;
+    all.push_back(e);
+  }
+  const eval::EvalResult sum = eval::merge(all);
+  SCOPED_TRACE(log.str());
+  EXPECT_GE(sum.recall(), 0.3);
+  EXPECT_GE(sum.precision(), 0.8);
 }
 
 TEST(Sight, WithoutAViewpointAMergedRoomGetsItsDoors) {

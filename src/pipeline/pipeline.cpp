@@ -122,9 +122,42 @@ void translate(PipelineResult& r, const Eigen::Vector3d& o) {
 
 Pipeline::Pipeline(const Parameters& parameters) : params_(parameters) { params_.validate(); }
 
+namespace {
+
+// A cloud no denser than the voxel grid (a mesh's vertices, an occupancy
+// map's voxel centres): its median nearest-neighbour spacing, from up to
+// kSpacingSamples of its points (searched within kSpacingReach; farther
+// counts as kSpacingReach). Only where the voxel grid kept nearly every point.
+constexpr std::size_t kSpacingSamples = 1000;
+constexpr float kSpacingReach = 0.2f;
+// Neighbourhoods (normals, region growing, the evidence grids) are sized in
+// voxels; a cloud whose points lie more than kSparseVoxels voxels apart has
+// too few in them: its voxel size is then taken as half its spacing (a mesh
+// export's 4 cm vertices work at 2 cm voxels), at most kMaxSparseVoxel.
+constexpr double kSparseVoxels = 2.4, kMaxSparseVoxel = 0.1;
+// The voxel grid kept this share of the points or more: maybe no denser than it.
+constexpr double kSparseKept = 0.8;
+
+double medianSpacing(const preprocess::Points& pts) {
+  const segmentation::NeighbourGrid grid(pts, kSpacingReach / 2);
+  const std::size_t step = std::max<std::size_t>(1, pts.size() / kSpacingSamples);
+  std::vector<float> nn;
+  std::vector<int> idx;
+  std::vector<float> d2;
+  for (std::size_t i = 0; i < pts.size(); i += step) {
+    grid.within(static_cast<int>(i), kSpacingReach, idx, d2);
+    nn.push_back(d2.empty() ? kSpacingReach : std::sqrt(*std::min_element(d2.begin(), d2.end())));
+  }
+  std::nth_element(nn.begin(), nn.begin() + nn.size() / 2, nn.end());
+  return nn[nn.size() / 2];
+}
+
+}  // namespace
+
 PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool with_reconstruction,
                              const Eigen::Vector3d& viewpoint_in) const {
-  const Parameters& p = params_;
+  Parameters local = params_;  // voxel_size may follow a sparse cloud's spacing
+  const Parameters& p = local;
   if (cloud.size() > static_cast<std::size_t>(p.max_points))
     throw std::invalid_argument("cloud of " + std::to_string(cloud.size()) + " points exceeds max_points (" +
                                 std::to_string(p.max_points) + ")");
@@ -151,6 +184,18 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
     thinned = preprocess::sanitizeAndDownsample(cloud, p.max_abs_coordinate, p.voxel_size, &kept);
     if (kept < cloud.size())
       res.warnings.push_back(std::to_string(cloud.size() - kept) + " non-finite or out-of-range points dropped");
+    if (p.voxel_size > 0 && thinned.size() >= 100 && thinned.size() >= kSparseKept * kept) {
+      const double spacing = medianSpacing(thinned);
+      if (spacing > kSparseVoxels * p.voxel_size) {
+        local.voxel_size = std::min(kMaxSparseVoxel, spacing / 2);
+        thinned = preprocess::sanitizeAndDownsample(cloud, p.max_abs_coordinate, p.voxel_size, &kept);
+        char buf[200];
+        std::snprintf(buf, sizeof buf,
+                      "sparse cloud (points %.1f cm apart, a mesh or an occupancy map): voxel_size taken as %.1f cm",
+                      100 * spacing, 100 * p.voxel_size);
+        res.warnings.push_back(buf);
+      }
+    }
   }
   res.points_used = thinned.size();
   watch.mark("preprocess");
