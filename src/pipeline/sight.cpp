@@ -250,6 +250,10 @@ constexpr std::size_t kMinRayPairs = 1000;
 constexpr std::size_t kMinPlanePoints = 12, kMinPlanes = 20;
 constexpr double kPlaneMinSpread = 0.01, kPlaneFlat = 1e-4, kFixedShare = 0.01;
 
+// A pixel that holds a return: finite, and not (0,0,0), which some drivers
+// write where there is none.
+bool isReturn(const pcl::PointXYZ& q) { return q.getVector3fMap().allFinite() && !q.getVector3fMap().isZero(); }
+
 RayCheck rayCheck(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vector3d& viewpoint) {
   RayCheck out;
   const Eigen::Vector3f v = viewpoint.cast<float>();
@@ -262,8 +266,7 @@ RayCheck rayCheck(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vect
       const pcl::PointXYZ& q = cloud.points[static_cast<std::size_t>(r) * cloud.width + k];
       Eigen::Vector3f d = q.getVector3fMap() - v;
       const float n = d.norm();
-      // (0,0,0): no return, as some drivers write it
-      if (!d.allFinite() || n < 1e-3f || q.getVector3fMap().isZero()) {
+      if (!isReturn(q) || !d.allFinite() || n < 1e-3f) {
         have = false, prev_angle = -1;
         continue;
       }
@@ -301,7 +304,7 @@ std::optional<Eigen::Vector3d> raysMeet(const pcl::PointCloud<pcl::PointXYZ>& cl
     std::size_t n = 0;
     for (std::uint32_t k = 0; k < count; ++k) {
       const pcl::PointXYZ& q = at(k);
-      if (!q.getVector3fMap().allFinite() || q.getVector3fMap().isZero()) continue;
+      if (!isReturn(q)) continue;
       const Eigen::Vector3d x = q.getVector3fMap().cast<double>();
       sum += x, sq += x * x.transpose(), ++n;
     }
@@ -343,7 +346,7 @@ std::optional<Eigen::Vector3d> raysMeet(const pcl::PointCloud<pcl::PointXYZ>& cl
       double n = 0, sr = 0, sh = 0, srr = 0, srh = 0;
       for (std::uint32_t k = 0; k < cloud.width; ++k) {
         const pcl::PointXYZ& q = cloud.points[static_cast<std::size_t>(row) * cloud.width + k];
-        if (!q.getVector3fMap().allFinite() || q.getVector3fMap().isZero()) continue;
+        if (!isReturn(q)) continue;
         const Eigen::Vector3d d = q.getVector3fMap().cast<double>() - c;
         const double h = d.dot(u), rho = (d - h * u).norm();
         n += 1, sr += rho, sh += h, srr += rho * rho, srh += rho * h;
