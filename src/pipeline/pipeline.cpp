@@ -297,6 +297,24 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
   }
   res.floor = fc.floor;
   res.ceiling = fc.ceiling;
+  // A given axis the surfaces contradict (levelled: the given axis turned
+  // by R, the used one +z) is warned of: a camera pitched beyond the
+  // refinement's reach.
+  if (const std::optional<Eigen::Vector3d> given = preprocess::parseUpAxis(p.up_axis)) {
+    const double reach = p.refine_up_deg > 0 ? p.refine_up_deg : 10.0;
+    const std::optional<double> off = preprocess::givenUpContradicted(
+        pts, normals.n, R.cast<double>() * *given, Eigen::Vector3d::UnitZ(), reach, fc.floor.has_value(),
+        static_cast<unsigned>(p.random_seed),
+        camera ? std::optional<Eigen::Vector3d>(R.cast<double>() * camera->imageUp()) : std::nullopt);
+    if (off) {
+      char buf[200];
+      std::snprintf(buf, sizeof buf,
+                    "the surfaces show an up %.0f deg from the given axis %s (refined within %.0f deg): "
+                    "a sensor pitched or rolled further? try up axis auto",
+                    *off, p.up_axis.c_str(), reach);
+      res.warnings.push_back(buf);
+    }
+  }
   if (const std::optional<std::string> why = singleSurface(pts, normals.n, viewpoint, p.up_axis != "auto"))
     res.warnings.push_back(*why);
   if (vertical_z.size() < 20) {

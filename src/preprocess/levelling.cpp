@@ -176,6 +176,45 @@ Eigen::Vector3d refineUp(const Eigen::Vector3d& up_in, const Points& normals, do
   return v.dot(up) >= cos_max ? v : up;
 }
 
+double squareShare(const Points& normals, const Eigen::Vector3d& up) {
+  const Eigen::Vector3f u = up.normalized().cast<float>();
+  const std::size_t stride = std::max<std::size_t>(1, normals.size() / 4000);
+  std::size_t square = 0, seen = 0;
+  for (std::size_t i = 0; i < normals.size(); i += stride) {
+    if (normals[i].squaredNorm() < 0.25f) continue;
+    const float d = std::abs(normals[i].dot(u));
+    square += (d > 0.97f) + (d < 0.05f);
+    ++seen;
+  }
+  return seen > 0 ? static_cast<double>(square) / static_cast<double>(seen) : 0.0;
+}
+
+namespace {
+// Below this share of square normals, or where no floor was seen, a given
+// axis is checked (a room seen with its own up: 0.07-0.95 over 240
+// robot-camera frames of four depth families, LiDAR sweeps, laser and
+// mesh rooms; cameras pitched 40 deg off the given axis, refined as far as
+// it reaches: 0.03-0.09, most with no floor seen).
+constexpr double kDoubtShare = 0.05;
+// ... and contradicted where the estimate holds this many times more (and
+// 0.3 of all at least): the 240 frames' estimates held at most 6.3 times
+// their axis's share, and only within 7 deg of it.
+constexpr double kDoubtRatio = 10.0, kDoubtMinShare = 0.3;
+}  // namespace
+
+std::optional<double> givenUpContradicted(const Points& points, const Points& normals, const Eigen::Vector3d& given,
+                                          const Eigen::Vector3d& used, double max_deg, bool floor_seen,
+                                          unsigned seed, const std::optional<Eigen::Vector3d>& upright) {
+  const double share = squareShare(normals, used);
+  if (share >= kDoubtShare && floor_seen) return std::nullopt;
+  const std::optional<Eigen::Vector3d> est = estimateUp(points, normals, seed, upright);
+  if (!est) return std::nullopt;
+  const double est_share = squareShare(normals, *est);
+  const double deg = std::acos(std::min(1.0, std::abs(est->normalized().dot(given.normalized())))) * 180.0 / M_PI;
+  if (deg <= max_deg || est_share < kDoubtMinShare || est_share < kDoubtRatio * share) return std::nullopt;
+  return deg;
+}
+
 Eigen::Vector3d nearestFrameAxis(const Eigen::Vector3d& dir, double max_deg) {
   const Eigen::Vector3d d = dir.normalized();
   Eigen::Index k = 0;
