@@ -128,6 +128,10 @@ def reader_seeds(rnd):
                                   f"element vertex {len(pts)}\nproperty double x\nproperty double y\n"
                                   "property double z\nend_header\n").encode() + \
         struct.pack(">Biii", 3, 0, 1, 2) + b"".join(struct.pack(">ddd", *p) for p in pts)
+    # Text clouds: S3DIS's "x y z r g b" lines; CloudCompare's export with its header; a .pts count line.
+    seeds["text_s3dis.txt"] = "".join(f"{x} {y} {z} {i % 256} 128 64\n" for i, (x, y, z) in enumerate(pts)).encode()
+    seeds["text_pts.pts"] = (f"{len(pts)}\n//X,Y,Z\n" +
+                             "".join(f"{x},{y};{z}\t-1200\n" for x, y, z in pts)).encode()
     return seeds
 
 

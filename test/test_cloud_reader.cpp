@@ -468,6 +468,38 @@ TEST_F(CloudReader, PlyBadHeaders) {
   EXPECT_READ_ERROR(write("nofmt.ply", "ply\n" + v + "end_header\n1 2 3\n"), "no format line");
 }
 
+// ------------------------------------------------------------------ text clouds
+
+TEST_F(CloudReader, TextCloudsAsDatasetsShipThem) {
+  // S3DIS's rooms: "x y z r g b" per line; CloudCompare's export with its
+  // column header, separators of all kinds, a comment and a blank line; a
+  // Leica .pts: the count, then "x y z i r g b".
+  const Cloud s3dis = readCloud(write("office_1.txt", "-1.5 0.25 1000.5 120 110 100\n2 -3.125 4 0 0 0\n"));
+  ASSERT_EQ(s3dis.size(), 2u);
+  EXPECT_EQ(s3dis.width, 2u);
+  EXPECT_EQ(s3dis.height, 1u);
+  EXPECT_EQ(s3dis[0].x, -1.5f);
+  EXPECT_EQ(s3dis[0].z, 1000.5f);
+  EXPECT_EQ(s3dis[1].y, -3.125f);
+  EXPECT_TRUE(s3dis.sensor_origin_.isZero());
+  const Cloud csv = readCloud(write("scan.xyz", "//X,Y,Z\n1,2,3\n\n# station 2\n4;5;6;0.5\r\n7\t8\t9\n"));
+  ASSERT_EQ(csv.size(), 3u);
+  EXPECT_EQ(csv[1].x, 4.0f);
+  EXPECT_EQ(csv[2].z, 9.0f);
+  const Cloud pts = readCloud(write("station.pts", "2\n1 2 3 -1200 10 20 30\n4 5 6 -800 10 20 30\n"));
+  ASSERT_EQ(pts.size(), 2u);
+  EXPECT_EQ(pts[1].z, 6.0f);
+  // What is wrong is said with its line.
+  EXPECT_READ_ERROR(write("short.txt", "1 2 3\n4 5\n"), "line 2");
+  EXPECT_READ_ERROR(write("word.txt", "1 2 3\n4 five 6\n"), "does not begin with three numbers");
+  EXPECT_READ_ERROR(write("cut.pts", "3\n1 2 3\n4 5 6\n"), "promises 3 points but 2 follow");
+  {
+    MaxPointsGuard guard(1);
+    EXPECT_READ_ERROR(write("two.txt", "1 2 3\n4 5 6\n"), "more than the limit of 1");
+    EXPECT_READ_ERROR(write("many.pts", "5\n1 2 3\n"), "more than the limit of 1");
+  }
+}
+
 TEST_F(CloudReader, NotAPointCloud) {
   EXPECT_READ_ERROR(write("text.pcd", "Dear diary,\ntoday I scanned a door.\n"), "not a point cloud file");
   const char png_bytes[] = "\x89PNG\r\n\x1a\n\0\0\0\rIHDR\0\0\0\x10\0\0\0\x10\x08\x06\0\0\0";

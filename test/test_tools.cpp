@@ -285,6 +285,30 @@ TEST(Tools, CliReadsAGeoreferencedCloudToTheMillimetre) {
   fs::remove_all(dir);
 }
 
+// A registered room as S3DIS ships it (a text file of "x y z r g b" lines,
+// no viewpoint) gives the doors the same points give as a PCD.
+TEST(Tools, CliReadsARoomAsATextFile) {
+  const fs::path dir = tempDir("cli_text");
+  ASSERT_EQ(run("door_scene_sim --quiet --seed 3001 --points 400000 --viewpoints 2 --merge --out " +
+                (dir / "s").string()).code, 0);
+  pcl::PointCloud<pcl::PointXYZ> c;
+  ASSERT_EQ(pcl::io::loadPCDFile((dir / "s.pcd").string(), c), 0);
+  {
+    std::ofstream out(dir / "room.txt");
+    out << std::setprecision(9);
+    for (const auto& p : c.points) out << p.x << " " << p.y << " " << p.z << " 128 128 128\n";
+  }
+  const Result a = run("door_state_cli --quiet " + (dir / "s.pcd").string());
+  const Result b = run("door_state_cli --quiet " + (dir / "room.txt").string());
+  ASSERT_EQ(a.code, 0);
+  ASSERT_EQ(b.code, 0) << b.out;
+  const nlohmann::json ja = nlohmann::json::parse(a.out), jb = nlohmann::json::parse(b.out);
+  ASSERT_FALSE(ja["doors"].empty());
+  EXPECT_EQ(ja["doors"], jb["doors"]);
+  EXPECT_EQ(ja["viewpoint"], jb["viewpoint"]);
+  fs::remove_all(dir);
+}
+
 // A report that ends before levelling (nothing usable in the cloud) says the
 // up axis it was given, not +z.
 TEST(Tools, CliEmptyReportKeepsTheGivenUpAxis) {

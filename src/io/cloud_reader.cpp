@@ -13,6 +13,7 @@
 #include <limits>
 #include <memory>
 #include <new>
+#include <optional>
 #include <streambuf>
 #include <string_view>
 #include <system_error>
@@ -258,13 +259,13 @@ pcl::PointCloud<pcl::PointXYZ> readPcd(Input& in, std::string line, Localizer& l
   std::vector<std::string> seen;
   bool first = true;
   for (bool have = true; data.empty(); have = false) {
-    if (!have && !in.readLine(line)) in.fail(first ? "not a point cloud file (no PCD or PLY header)"
-                                          : "PCD header has no DATA line");
+    if (!have && !in.readLine(line))
+      in.fail(first ? "not a point cloud file (no PCD or PLY header, nor lines of x y z)" : "PCD header has no DATA line");
     auto tok = split(line);
     if (tok.empty() || tok[0][0] == '#') continue;
     std::string key(tok[0]);
     if (!isPcdKeyword(key))
-      in.fail(first ? "not a point cloud file (no PCD or PLY header)"
+      in.fail(first ? "not a point cloud file (no PCD or PLY header, nor lines of x y z)"
                     : "unknown PCD header line " + quote(line));
     first = false;
     if (key == "COLUMNS") key = "FIELDS";
@@ -428,6 +429,78 @@ pcl::PointCloud<pcl::PointXYZ> readPcd(Input& in, std::string line, Localizer& l
   } else {
     in.fail("unknown DATA kind " + quote(data) + " (expected ascii, binary or binary_compressed)");
   }
+  return cloud;
+}
+
+// ---------------------------------------------------------------- plain text
+
+// The fields of a text line, split at spaces, tabs, commas and semicolons.
+std::vector<std::string_view> textFields(const std::string& line) {
+  std::vector<std::string_view> out;
+  auto sep = [](char c) { return c == ' ' || c == '\t' || c == ',' || c == ';'; };
+  std::size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && sep(line[i])) ++i;
+    std::size_t j = i;
+    while (j < line.size() && !sep(line[j])) ++j;
+    if (j > i) out.emplace_back(line.data() + i, j - i);
+    i = j;
+  }
+  return out;
+}
+
+bool skippedText(const std::string& line) {
+  const std::size_t i = line.find_first_not_of(" \t");
+  return i == std::string::npos || line[i] == '#' || line.compare(i, 2, "//") == 0;
+}
+
+// A first line of numbers only: three or more (a point), or one whole count
+// (Leica .pts); or a column header after // (CloudCompare's "//X,Y,Z"). A
+// PCD header's first line is a # comment or a keyword.
+bool looksLikeText(const std::string& first) {
+  if (first.compare(0, 2, "//") == 0) return true;
+  const std::vector<std::string_view> f = textFields(first);
+  double d;
+  u64 n;
+  if (f.size() == 1) return parseU64(f[0], n);
+  return f.size() >= 3 && std::all_of(f.begin(), f.end(), [&](std::string_view v) { return parseDouble(v, d); });
+}
+
+// x y z and any further columns per line (S3DIS rooms' .txt, .xyz,
+// CloudCompare's ASCII export), optionally after a line holding the point
+// count alone (.pts); blank lines and lines starting with # or // (a column
+// header) are skipped. One cloud of the points in file order, unorganized.
+pcl::PointCloud<pcl::PointXYZ> readText(Input& in, const std::string& first, Localizer& loc) {
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  std::optional<u64> promised;
+  std::string line = first;
+  u64 line_no = 1;
+  bool have = true;
+  {
+    const std::vector<std::string_view> f = textFields(first);
+    u64 n;
+    if (!skippedText(first) && f.size() == 1 && parseU64(f[0], n)) {
+      checkPointLimit(in, n);
+      promised = n;
+      have = in.readLine(line), ++line_no;
+    }
+  }
+  for (; have; have = in.readLine(line), ++line_no) {
+    if (skippedText(line)) continue;
+    const std::vector<std::string_view> f = textFields(line);
+    double v[3];
+    if (f.size() < 3 || !parseDouble(f[0], v[0]) || !parseDouble(f[1], v[1]) || !parseDouble(f[2], v[2]))
+      in.fail("line " + std::to_string(line_no) + ": " + quote(line.substr(0, 80)) +
+              " does not begin with three numbers x y z");
+    if (cloud.points.size() >= g_max_points.load())
+      in.fail("holds more than the limit of " + std::to_string(g_max_points.load()) + " points (parameter max_points)");
+    cloud.points.push_back(loc(v[0], v[1], v[2]));
+  }
+  if (promised && *promised != cloud.points.size())
+    in.fail("the first line promises " + std::to_string(*promised) + " points but " +
+            std::to_string(cloud.points.size()) + " follow");
+  cloud.width = static_cast<std::uint32_t>(cloud.points.size());
+  cloud.height = 1;
   return cloud;
 }
 
@@ -602,11 +675,14 @@ template <typename MakeInput>
 pcl::PointCloud<pcl::PointXYZ> readFrom(const std::string& name, MakeInput make, CloudFrame* frame) {
   try {
     Input in = make();
-    // PLY files start with the line "ply"; anything else is tried as PCD.
+    // PLY files start with the line "ply", text clouds with numbers;
+    // anything else is tried as PCD.
     std::string first;
     in.readLine(first);
     Localizer loc(frame);
-    pcl::PointCloud<pcl::PointXYZ> cloud = first == "ply" ? readPly(in, loc) : readPcd(in, first, loc);
+    pcl::PointCloud<pcl::PointXYZ> cloud = first == "ply"            ? readPly(in, loc)
+                                           : looksLikeText(first) ? readText(in, first, loc)
+                                                                  : readPcd(in, first, loc);
     // The VIEWPOINT in the frame the points were moved into (in double).
     if (frame && !frame->shift.isZero())
       cloud.sensor_origin_.head<3>() = (cloud.sensor_origin_.head<3>().cast<double>() - frame->shift).cast<float>();
