@@ -13,6 +13,7 @@
 #include "door_state_recognition/io/report.hpp"
 #include "door_state_recognition/pipeline/pipeline.hpp"
 #include "door_state_recognition/pipeline/sight.hpp"
+#include "door_state_recognition/pipeline/viewpoint_choice.hpp"
 #include "door_state_recognition/preprocess/camera.hpp"
 #include "door_state_recognition/sim/drive.hpp"
 #include "door_state_recognition/sim/lidar.hpp"
@@ -107,6 +108,54 @@ TEST(Sight, OneScansOwnViewpointIsCredibleAndAPointOutsideTheRoomIsNot) {
     const sight::ViewpointCheck outside = sight::checkViewpoint(one.cloud, Eigen::Vector3d(12, 0, 0), p);
     EXPECT_FALSE(outside.credible) << "seed " << seed << ": " << outside.reason;
   }
+}
+
+TEST(Sight, TheViewpointChoiceTakesACredibleViewpointAndMergesWhereOneIsNot) {
+  // chooseViewpoints as door_state_cli --viewpoint runs it: one scan under
+  // auto is seen from its VIEWPOINT (said taken, no note); the same scan
+  // with its VIEWPOINT 12 m outside the room, beside another, makes both
+  // one cloud without a viewpoint (a note says which and why); none
+  // merges them; a VIEWPOINT that is not finite is refused.
+  const Parameters p;
+  const Merged one = merged(3100, 1, 200000);
+  pcl::PointCloud<pcl::PointXYZ> outside = one.cloud;
+  outside.sensor_origin_ = Eigen::Vector4f(12, 0, 0, 0);
+  {
+    sight::ViewpointChoice c;
+    sight::chooseViewpoints({{&one.cloud, "scan", false}}, sight::ViewpointMode::Auto, std::nullopt,
+                            Eigen::Vector3d::Zero(), p, c);
+    ASSERT_EQ(c.stations.size(), 1u);
+    EXPECT_FALSE(c.without_viewpoint);
+    EXPECT_EQ(c.stations[0].cloud, &one.cloud);
+    EXPECT_TRUE(c.notes.empty());
+    ASSERT_EQ(c.taken.size(), 1u);
+    EXPECT_NE(c.taken[0].find("of scan taken"), std::string::npos) << c.taken[0];
+  }
+  for (const sight::ViewpointMode mode : {sight::ViewpointMode::Auto, sight::ViewpointMode::None}) {
+    sight::ViewpointChoice c;
+    sight::chooseViewpoints({{&one.cloud, "a", false}, {&outside, "b", true}}, mode, std::nullopt,
+                            Eigen::Vector3d::Zero(), p, c);
+    EXPECT_TRUE(c.without_viewpoint);
+    ASSERT_EQ(c.stations.size(), 1u);
+    EXPECT_EQ(c.stations[0].cloud->size(), 2 * one.cloud.size());
+    if (mode == sight::ViewpointMode::Auto) {
+      ASSERT_EQ(c.notes.size(), 1u);
+      EXPECT_NE(c.notes[0].find("b's VIEWPOINT (12, 0, 0) is not credible"), std::string::npos) << c.notes[0];
+    }
+  }
+  {
+    sight::ViewpointChoice c;
+    sight::chooseViewpoints({{&one.cloud, "scan", false}}, sight::ViewpointMode::Header, std::nullopt,
+                            Eigen::Vector3d::Zero(), p, c);
+    EXPECT_FALSE(c.without_viewpoint);
+    EXPECT_TRUE(c.taken.empty() && c.notes.empty());
+  }
+  pcl::PointCloud<pcl::PointXYZ> nan = one.cloud;
+  nan.sensor_origin_ = Eigen::Vector4f(std::numeric_limits<float>::quiet_NaN(), 0, 0, 0);
+  sight::ViewpointChoice c;
+  EXPECT_THROW(sight::chooseViewpoints({{&nan, "nan", true}}, sight::ViewpointMode::None, std::nullopt,
+                                       Eigen::Vector3d::Zero(), p, c),
+               std::invalid_argument);
 }
 
 TEST(Sight, AMergedRoomHidesPointsFromItsFirstStation) {

@@ -22,7 +22,7 @@
 #include "door_state_recognition/io/report.hpp"
 #include "door_state_recognition/io/svg.hpp"
 #include "door_state_recognition/pipeline/pipeline.hpp"
-#include "door_state_recognition/pipeline/sight.hpp"
+#include "door_state_recognition/pipeline/viewpoint_choice.hpp"
 #include "door_state_recognition/util/keep_freed_memory.hpp"
 #include "door_state_recognition/util/omp_spin.hpp"
 
@@ -252,76 +252,40 @@ int main(int argc, char** argv) {
       read_each_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_read).count());
     }
     const double read_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    // Each INPUT seen from its VIEWPOINT (PCD; the origin where none is
-    // given), from --viewpoint X,Y,Z, or from no known position.
+    // Each INPUT seen from its VIEWPOINT, from --viewpoint X,Y,Z, or from
+    // no known position (dsr::sight::chooseViewpoints says which and why).
     std::string input = inputs[0];
-    std::vector<dsr::Station> stations;
+    for (std::size_t k = 1; k < inputs.size(); ++k) input += "," + inputs[k];
     const Eigen::Vector3d shift = frames.front().shift;
     std::vector<std::string> sight_notes;
-    bool without_viewpoint = viewpoint_arg == "none";
     if (!shift.isZero()) {
       char at[160];
       std::snprintf(at, sizeof at, "(%.0f, %.0f, %.0f)", shift.x(), shift.y(), shift.z());
       sight_notes.push_back(std::string("coordinates lie far from their origin: read moved by -") + at +
                             " (in double, kept to the millimetre); the report is in the input's frame, " +
                             "the --reconstruction and --svg in that moved frame");
-      // No VIEWPOINT in a georeferenced file: no sensor stood at its origin.
-      if (viewpoint_arg == "auto" && !viewpoint_xyz &&
-          std::none_of(frames.begin(), frames.end(), [](const dsr::io::CloudFrame& f) { return f.viewpoint_given; })) {
-        without_viewpoint = true;
-        sight_notes.push_back("viewpoint: no VIEWPOINT in a georeferenced cloud; run without a viewpoint");
-      }
     }
-    for (std::size_t k = 0; k < clouds.size(); ++k) {
-      const Eigen::Vector3d vp = without_viewpoint && !shift.isZero() ? Eigen::Vector3d::Zero()
-                                 : viewpoint_xyz ? Eigen::Vector3d(*viewpoint_xyz - shift)
-                                                 : clouds[k].sensor_origin_.head<3>().cast<double>();
-      if (!vp.allFinite() || vp.cwiseAbs().maxCoeff() > params.max_abs_coordinate) {
-        if (viewpoint_xyz) throw std::invalid_argument("--viewpoint lies beyond max_abs_coordinate");
-        throw dsr::io::CloudReadError(inputs[k] + ": VIEWPOINT lies beyond max_abs_coordinate or is not finite");
-      }
-      stations.push_back({&clouds[k], vp});
-      if (k > 0) input += "," + inputs[k];
-    }
-    for (std::size_t k = 0; k < clouds.size() && !quiet; ++k) {
-      const Eigen::Vector3d& vp = stations[k].viewpoint;
-      std::cerr << "door_state_cli: read " << clouds[k].size() << " points from " << inputs[k] << " in "
-                << read_each_ms[k] << " ms\n";
-      if (!quiet && (clouds.size() > 1 || !vp.isZero()))
-        std::cerr << "door_state_cli: station " << k << " at (" << vp.x() << ", " << vp.y() << ", " << vp.z() << ")\n";
-    }
-    // A station's points hidden from its VIEWPOINT, where few (its depth
-    // edges in a cluttered room), are left out: the rest are its rays.
-    std::vector<pcl::PointCloud<pcl::PointXYZ>> seen(clouds.size());
-    if (viewpoint_arg == "auto")
+    std::vector<dsr::sight::InputCloud> input_clouds;
+    for (std::size_t k = 0; k < clouds.size(); ++k) input_clouds.push_back({&clouds[k], inputs[k], frames[k].viewpoint_given});
+    const dsr::sight::ViewpointMode mode = viewpoint_xyz             ? dsr::sight::ViewpointMode::Given
+                                           : viewpoint_arg == "none"   ? dsr::sight::ViewpointMode::None
+                                           : viewpoint_arg == "header" ? dsr::sight::ViewpointMode::Header
+                                                                       : dsr::sight::ViewpointMode::Auto;
+    dsr::sight::ViewpointChoice choice;
+    dsr::sight::chooseViewpoints(input_clouds, mode, viewpoint_xyz, shift, params, choice);
+    sight_notes.insert(sight_notes.end(), choice.notes.begin(), choice.notes.end());
+    const std::vector<dsr::Station>& stations = choice.stations;
+    const bool without_viewpoint = choice.without_viewpoint;
+    if (!quiet) {
+      for (std::size_t k = 0; k < clouds.size(); ++k)
+        std::cerr << "door_state_cli: read " << clouds[k].size() << " points from " << inputs[k] << " in "
+                  << read_each_ms[k] << " ms\n";
       for (std::size_t k = 0; k < stations.size() && !without_viewpoint; ++k) {
-        const dsr::sight::ViewpointCheck check =
-            dsr::sight::checkViewpoint(clouds[k], stations[k].viewpoint, params, &seen[k]);
         const Eigen::Vector3d& vp = stations[k].viewpoint;
-        char at[120];
-        std::snprintf(at, sizeof at, "(%.3g, %.3g, %.3g)", vp.x(), vp.y(), vp.z());
-        if (check.rays_meet) {  // an organized frame moved out of its sensor's frame: seen from its sensor
-          stations[k].viewpoint = *check.rays_meet;
-          sight_notes.push_back("viewpoint: " + inputs[k] + "'s VIEWPOINT " + at + ": " + check.reason +
-                                "; taken where they meet");
-        } else if (check.take_visible) {
-          sight_notes.push_back("viewpoint: " + inputs[k] + "'s VIEWPOINT " + at + " taken, the " +
-                                std::to_string(clouds[k].size() - seen[k].size()) +
-                                " points hidden from it left out: " + check.reason);
-          stations[k].cloud = &seen[k];
-        } else if (!check.credible) {
-          without_viewpoint = true;
-          sight_notes.push_back("viewpoint: " + inputs[k] + "'s VIEWPOINT " + at + " is not credible: " + check.reason +
-                                "; run without a viewpoint");
-        } else if (!quiet) {
-          std::cerr << "door_state_cli: viewpoint " << at << " of " << inputs[k] << " taken: " << check.reason << "\n";
-        }
+        if (stations.size() > 1 || !vp.isZero())
+          std::cerr << "door_state_cli: station " << k << " at (" << vp.x() << ", " << vp.y() << ", " << vp.z() << ")\n";
       }
-    // Without a viewpoint the inputs are one cloud.
-    pcl::PointCloud<pcl::PointXYZ> merged;
-    if (without_viewpoint && clouds.size() > 1) {
-      for (const auto& c : clouds) merged += c;
-      stations.assign(1, {&merged, Eigen::Vector3d::Zero()});
+      for (const std::string& t : choice.taken) std::cerr << "door_state_cli: " << t << "\n";
     }
     dsr::PipelineResult result = without_viewpoint ? pipeline.runWithoutViewpoint(*stations[0].cloud, !recon_out.empty())
                                                    : pipeline.runStations(stations, !recon_out.empty());
