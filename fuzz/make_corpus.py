@@ -132,6 +132,8 @@ def reader_seeds(rnd):
     seeds["text_s3dis.txt"] = "".join(f"{x} {y} {z} {i % 256} 128 64\n" for i, (x, y, z) in enumerate(pts)).encode()
     seeds["text_pts.pts"] = (f"{len(pts)}\n//X,Y,Z\n" +
                              "".join(f"{x},{y};{z}\t-1200\n" for x, y, z in pts)).encode()
+    seeds["obj_mesh.obj"] = ("# seed\nmtllib m.mtl\no room\n" + "".join(f"v {x} {y} {z}\n" for x, y, z in pts) +
+                             "vn 0 0 1\nusemtl m\nf 1//1 2//1 3//1\n").encode()
     return seeds
 
 

@@ -470,7 +470,7 @@ TEST_F(CloudReader, PlyBadHeaders) {
 
 // ------------------------------------------------------------------ text clouds
 
-TEST_F(CloudReader, TextCloudsAsDatasetsShipThem) {
+TEST_F(CloudReader, TextCloudsAndMeshesAsDatasetsAndScannersShipThem) {
   // S3DIS's rooms: "x y z r g b" per line; CloudCompare's export with its
   // column header, separators of all kinds, a comment and a blank line; a
   // Leica .pts: the count, then "x y z i r g b".
@@ -489,6 +489,13 @@ TEST_F(CloudReader, TextCloudsAsDatasetsShipThem) {
   const Cloud pts = readCloud(write("station.pts", "2\n1 2 3 -1200 10 20 30\n4 5 6 -800 10 20 30\n"));
   ASSERT_EQ(pts.size(), 2u);
   EXPECT_EQ(pts[1].z, 6.0f);
+  // A phone scanner's or photogrammetry's OBJ mesh: its vertices.
+  const Cloud obj = readCloud(write("room.obj", "# Polycam\nmtllib room.mtl\no Mesh\nv 1 2 3\nv 4 5 6 0.5 0.5 0.5\n"
+                                                "vn 0 0 1\nvt 0 1\nusemtl m\nf 1/1/1 2/1/1 1/1/1\nv -1 -2 -3\n"));
+  ASSERT_EQ(obj.size(), 3u);
+  EXPECT_EQ(obj[1].y, 5.0f);
+  EXPECT_EQ(obj[2].z, -3.0f);
+  EXPECT_READ_ERROR(write("bad.obj", "v 1 2 3\nv 1 2\n"), "vertex 1");
   // What is wrong is said with its line.
   EXPECT_READ_ERROR(write("short.txt", "1 2 3\n4 5\n"), "line 2");
   EXPECT_READ_ERROR(write("word.txt", "1 2 3\n4 five 6\n"), "does not begin with three numbers");

@@ -286,8 +286,9 @@ TEST(Tools, CliReadsAGeoreferencedCloudToTheMillimetre) {
 }
 
 // A registered room as S3DIS ships it (a text file of "x y z r g b" lines,
-// no viewpoint) gives the doors the same points give as a PCD.
-TEST(Tools, CliReadsARoomAsATextFile) {
+// no viewpoint), or as an OBJ's vertices, gives the doors the same points
+// give as a PCD.
+TEST(Tools, CliReadsARoomAsATextFileOrAnObjMesh) {
   const fs::path dir = tempDir("cli_text");
   ASSERT_EQ(run("door_scene_sim --quiet --seed 3001 --points 400000 --viewpoints 2 --merge --out " +
                 (dir / "s").string()).code, 0);
@@ -297,15 +298,22 @@ TEST(Tools, CliReadsARoomAsATextFile) {
     std::ofstream out(dir / "room.txt");
     out << std::setprecision(9);
     for (const auto& p : c.points) out << p.x << " " << p.y << " " << p.z << " 128 128 128\n";
+    std::ofstream obj(dir / "room.obj");
+    obj << std::setprecision(9) << "# exported\no room\n";
+    for (const auto& p : c.points) obj << "v " << p.x << " " << p.y << " " << p.z << "\n";
+    obj << "f 1 2 3\n";
   }
   const Result a = run("door_state_cli --quiet " + (dir / "s.pcd").string());
-  const Result b = run("door_state_cli --quiet " + (dir / "room.txt").string());
   ASSERT_EQ(a.code, 0);
-  ASSERT_EQ(b.code, 0) << b.out;
-  const nlohmann::json ja = nlohmann::json::parse(a.out), jb = nlohmann::json::parse(b.out);
+  const nlohmann::json ja = nlohmann::json::parse(a.out);
   ASSERT_FALSE(ja["doors"].empty());
-  EXPECT_EQ(ja["doors"], jb["doors"]);
-  EXPECT_EQ(ja["viewpoint"], jb["viewpoint"]);
+  for (const char* name : {"room.txt", "room.obj"}) {
+    const Result b = run("door_state_cli --quiet " + (dir / name).string());
+    ASSERT_EQ(b.code, 0) << name << ": " << b.out;
+    const nlohmann::json jb = nlohmann::json::parse(b.out);
+    EXPECT_EQ(ja["doors"], jb["doors"]) << name;
+    EXPECT_EQ(ja["viewpoint"], jb["viewpoint"]) << name;
+  }
   fs::remove_all(dir);
 }
 

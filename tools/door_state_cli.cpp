@@ -1,4 +1,4 @@
-// door_state_cli: runs the door-state pipeline on a PCD, PLY or text file and
+// door_state_cli: runs the door-state pipeline on a PCD, PLY, OBJ or text file and
 // writes the report JSON.
 #include <pcl/io/ply_io.h>
 
@@ -36,8 +36,9 @@ const char* kUsage = R"(usage: door_state_cli [--config FILE.yaml] [--up +z|-z|+
 Finds the walls and doors in a point cloud and tells every door's state
 (closed, semi_open, open; not_closed where the doorway is seen through but
 its leaf is not) and opening angle. INPUT is a PCD (ascii, binary,
-binary_compressed) or PLY (ascii, binary) file with at least x, y, z, or
-a text file with x y z first on each line (S3DIS, .xyz, .pts). The
+binary_compressed) or PLY (ascii, binary) file with at least x, y, z, an
+OBJ mesh (its vertices), or a text file with x y z first on each line
+(S3DIS, .xyz, .pts). The
 report (JSON, input frame, metres and degrees) goes to stdout, or to --json.
 
 Free space is told by rays from where the sensor stood (--viewpoint). By

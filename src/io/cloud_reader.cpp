@@ -251,7 +251,40 @@ bool isPcdKeyword(std::string_view k) {
   return false;
 }
 
-// `line` holds the file's first line, already read.
+// ---------------------------------------------------------------- OBJ
+
+bool isObjKeyword(std::string_view k) {
+  for (const char* w : {"v", "vn", "vt", "vp", "f", "l", "p", "o", "g", "s", "mtllib", "usemtl"})
+    if (k == w) return true;
+  return false;
+}
+
+// A Wavefront OBJ mesh (photogrammetry and phone-scanner exports): its
+// vertices ("v x y z [w | r g b]") as the cloud, in file order; faces,
+// normals, texture coordinates, groups and materials skipped. `line` holds
+// the first line that is not a # comment, already read.
+pcl::PointCloud<pcl::PointXYZ> readObj(Input& in, std::string line, Localizer& loc) {
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  std::vector<double> v(3);
+  for (bool have = true; have; have = in.readLine(line)) {
+    const std::vector<std::string_view> tok = split(line);
+    if (tok.empty() || tok[0] != "v") continue;
+    if (tok.size() < 4 || !parseDouble(tok[1], v[0]) || !parseDouble(tok[2], v[1]) || !parseDouble(tok[3], v[2]))
+      in.fail("vertex " + std::to_string(cloud.points.size()) + ": " + quote(line.substr(0, 80)) +
+              " is not 'v x y z'");
+    if (cloud.points.size() >= g_max_points.load())
+      in.fail("holds more than the limit of " + std::to_string(g_max_points.load()) + " points (parameter max_points)");
+    cloud.points.push_back(loc(v[0], v[1], v[2]));
+  }
+  cloud.width = static_cast<std::uint32_t>(cloud.points.size());
+  cloud.height = 1;
+  return cloud;
+}
+
+// ---------------------------------------------------------------- PCD
+
+// `line` holds the file's first line, already read (an OBJ's first
+// keyword after its comments hands it to readObj).
 pcl::PointCloud<pcl::PointXYZ> readPcd(Input& in, std::string line, Localizer& loc) {
   std::vector<std::string> names, sizes, types, counts;
   std::string width_s, height_s, points_s, data;
@@ -264,6 +297,7 @@ pcl::PointCloud<pcl::PointXYZ> readPcd(Input& in, std::string line, Localizer& l
     auto tok = split(line);
     if (tok.empty() || tok[0][0] == '#') continue;
     std::string key(tok[0]);
+    if (first && isObjKeyword(key)) return readObj(in, line, loc);
     if (!isPcdKeyword(key))
       in.fail(first ? "not a point cloud file (no PCD or PLY header, nor lines of x y z)"
                     : "unknown PCD header line " + quote(line));

@@ -11,9 +11,10 @@ class CloudReadError : public std::runtime_error { using std::runtime_error::run
 // Reads x,y,z of a PCD (ascii, binary, binary_compressed) or PLY (ascii,
 // binary_little_endian, binary_big_endian) file, or of a text file with x y
 // z first on each line (S3DIS's .txt, .xyz, .pts with its count line;
-// spaces, tabs, commas or semicolons between; # and // lines skipped). The
-// format is chosen by the file's content (magic "ply" / PCD header keywords
-// / a first line of numbers), not its extension.
+// spaces, tabs, commas or semicolons between; # and // lines skipped), or
+// the vertices of a Wavefront OBJ mesh. The format is chosen by the file's
+// content (magic "ply" / PCD header keywords / a first line of numbers / OBJ
+// keywords), not its extension.
 // Keeps width/height (organized clouds stay organized) and keeps NaN/Inf
 // points as they are (callers filter). Extra fields (rgb, label, normals...)
 // are skipped. x,y,z may be float32 or float64 (converted to float); any
