@@ -242,13 +242,16 @@ void checkPointLimit(Input& in, u64 points) {
             std::to_string(g_max_points.load()) + " (parameter max_points)");
 }
 
-// ---------------------------------------------------------------- PCD
+// ---------------------------------------------------------------- point by point
 
-bool isPcdKeyword(std::string_view k) {
-  for (const char* w : {"VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT", "WIDTH", "HEIGHT",
-                        "VIEWPOINT", "POINTS", "DATA"})
-    if (k == w) return true;
-  return false;
+// Text clouds and OBJ meshes hold no count to check first: each point is
+// appended within max_points, and the cloud is unorganized.
+void appendPoint(Input& in, pcl::PointCloud<pcl::PointXYZ>& cloud, const pcl::PointXYZ& q) {
+  if (cloud.points.size() >= g_max_points.load())
+    in.fail("holds more than the limit of " + std::to_string(g_max_points.load()) + " points (parameter max_points)");
+  cloud.points.push_back(q);
+  cloud.width = static_cast<std::uint32_t>(cloud.points.size());
+  cloud.height = 1;
 }
 
 // ---------------------------------------------------------------- OBJ
@@ -265,23 +268,28 @@ bool isObjKeyword(std::string_view k) {
 // the first line that is not a # comment, already read.
 pcl::PointCloud<pcl::PointXYZ> readObj(Input& in, std::string line, Localizer& loc) {
   pcl::PointCloud<pcl::PointXYZ> cloud;
-  std::vector<double> v(3);
+  cloud.height = 1;
   for (bool have = true; have; have = in.readLine(line)) {
     const std::vector<std::string_view> tok = split(line);
     if (tok.empty() || tok[0] != "v") continue;
+    double v[3];
     if (tok.size() < 4 || !parseDouble(tok[1], v[0]) || !parseDouble(tok[2], v[1]) || !parseDouble(tok[3], v[2]))
       in.fail("vertex " + std::to_string(cloud.points.size()) + ": " + quote(line.substr(0, 80)) +
               " is not 'v x y z'");
-    if (cloud.points.size() >= g_max_points.load())
-      in.fail("holds more than the limit of " + std::to_string(g_max_points.load()) + " points (parameter max_points)");
-    cloud.points.push_back(loc(v[0], v[1], v[2]));
+    appendPoint(in, cloud, loc(v[0], v[1], v[2]));
   }
-  cloud.width = static_cast<std::uint32_t>(cloud.points.size());
-  cloud.height = 1;
   return cloud;
 }
 
 // ---------------------------------------------------------------- PCD
+
+bool isPcdKeyword(std::string_view k) {
+  for (const char* w : {"VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT", "WIDTH", "HEIGHT",
+                        "VIEWPOINT", "POINTS", "DATA"})
+    if (k == w) return true;
+  return false;
+}
+
 
 // `line` holds the file's first line, already read (an OBJ's first
 // keyword after its comments hands it to readObj).
@@ -506,6 +514,7 @@ bool looksLikeText(const std::string& first) {
 // header) are skipped. One cloud of the points in file order, unorganized.
 pcl::PointCloud<pcl::PointXYZ> readText(Input& in, const std::string& first, Localizer& loc) {
   pcl::PointCloud<pcl::PointXYZ> cloud;
+  cloud.height = 1;
   std::optional<u64> promised;
   std::string line = first;
   u64 line_no = 1;
@@ -526,15 +535,11 @@ pcl::PointCloud<pcl::PointXYZ> readText(Input& in, const std::string& first, Loc
     if (f.size() < 3 || !parseDouble(f[0], v[0]) || !parseDouble(f[1], v[1]) || !parseDouble(f[2], v[2]))
       in.fail("line " + std::to_string(line_no) + ": " + quote(line.substr(0, 80)) +
               " does not begin with three numbers x y z");
-    if (cloud.points.size() >= g_max_points.load())
-      in.fail("holds more than the limit of " + std::to_string(g_max_points.load()) + " points (parameter max_points)");
-    cloud.points.push_back(loc(v[0], v[1], v[2]));
+    appendPoint(in, cloud, loc(v[0], v[1], v[2]));
   }
   if (promised && *promised != cloud.points.size())
     in.fail("the first line promises " + std::to_string(*promised) + " points but " +
             std::to_string(cloud.points.size()) + " follow");
-  cloud.width = static_cast<std::uint32_t>(cloud.points.size());
-  cloud.height = 1;
   return cloud;
 }
 
