@@ -69,6 +69,31 @@ constexpr int kRefinePasses = 10;
 // convergence").
 constexpr double kConvergedTurnDeg = 0.5;
 
+// A wall's noise (sigma) is read off its inliers, from the share of them
+// within a third of wall_distance of its line, in each kNoiseStretch (m)
+// along it holding kNoiseStretchPoints of them; a wall whose
+// kNoiseBandSigmas sigma exceed wall_distance is refit in that band (at most
+// kNoiseBandMax wall_distance), passes ending once a pass turns it by less
+// than 0.05 deg (kNoiseBandConverged: its cosine).
+constexpr double kNoiseStretch = 0.5, kNoiseBandSigmas = 2.5, kNoiseBandMax = 2.0;
+constexpr std::size_t kNoiseStretchPoints = 20;
+constexpr double kNoiseBandConverged = 0.9999996;
+
+// The sigma of Gaussian noise about a line that leaves `share` of the points
+// within a band of +-wd within +-wd/3 of the line: the share falls from 1
+// (no noise) to 1/3 (noise far wider than the band), one sigma for each.
+double sigmaOfInnerShare(double share, double wd) {
+  auto shareOf = [&](double sigma) {
+    return std::erf(wd / 3 / (sigma * std::sqrt(2.0))) / std::erf(wd / (sigma * std::sqrt(2.0)));
+  };
+  double lo = 1e-4 * wd, hi = 100 * wd;  // shareOf(lo) ~ 1, shareOf(hi) ~ 1/3
+  for (int i = 0; i < 60; ++i) {
+    const double mid = std::sqrt(lo * hi);
+    (shareOf(mid) > share ? lo : hi) = mid;
+  }
+  return std::sqrt(lo * hi);
+}
+
 // RANSAC never stops before this many draws.
 constexpr int kMinRansacIterations = 20;
 // Below these (sample points scored, a plane's inliers) the work of a RANSAC
@@ -352,6 +377,65 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
         inl.insert(inl.end(), inl_second.begin(), inl_second.end());
         q2.insert(q2.end(), q2_second.begin(), q2_second.end());
       };
+      // Where the wall's own noise fills the inlier band (a depth camera's
+      // wall 3-5 m off: sigma 1.5-2.5 cm against wall_distance's 3 cm), a
+      // refit on the points within the band is drawn to the line it was cut
+      // with (see kRefinePasses), and the tilt left hides trim and recess. The
+      // noise is read off the inliers themselves (kNoiseStretch; the median
+      // of the stretches', where a leaf or trim fills one or two): where
+      // kNoiseBandSigmas sigma exceed the band, the line is refit in that
+      // wider band to convergence, and kept where it holds at least as many
+      // inliers (within wall_distance) as the line it started from (a band
+      // centred on the wall holds the most of its points); the inliers stay
+      // those within wall_distance. A quiet wall is left as it is.
+      auto fitInNoiseBand = [&] {
+        std::vector<int> wide_in;
+        std::vector<Eigen::Vector2d> wide_q;
+        auto wideBand = [&](double band) {
+          wide_in.clear(), wide_q.clear();
+          collectInliers(px.data(), py.data(), pnx.data(), pny.data(), pool.data(), pool.size(), best_pt.x(),
+                         best_pt.y(), best_n.x(), best_n.y(), band, p.wall_normal_agreement, wide_in, wide_q);
+        };
+        // Each kNoiseStretch (m) along the line with kNoiseStretchPoints
+        // inliers or more: the share of them within a third of the band.
+        const double wd = p.wall_distance;
+        const Eigen::Vector2d along(best_n.y(), -best_n.x());
+        std::vector<std::pair<int, char>> dev(q2.size());
+        for (std::size_t k = 0; k < q2.size(); ++k) {
+          const Eigen::Vector2d r = q2[k] - best_pt;
+          dev[k] = {static_cast<int>(std::floor(r.dot(along) / kNoiseStretch)), std::abs(r.dot(best_n)) < wd / 3};
+        }
+        std::sort(dev.begin(), dev.end());
+        std::vector<double> stretch_sigma;
+        for (std::size_t a = 0, b; a < dev.size(); a = b) {
+          std::size_t inner = 0;
+          for (b = a; b < dev.size() && dev[b].first == dev[a].first; ++b) inner += dev[b].second;
+          if (b - a >= kNoiseStretchPoints) stretch_sigma.push_back(sigmaOfInnerShare(static_cast<double>(inner) / (b - a), wd));
+        }
+        if (stretch_sigma.empty()) return;
+        std::nth_element(stretch_sigma.begin(), stretch_sigma.begin() + stretch_sigma.size() / 2, stretch_sigma.end());
+        const double sigma = stretch_sigma[stretch_sigma.size() / 2];
+        const double band = std::min(kNoiseBandMax * wd, kNoiseBandSigmas * sigma);
+        if (band <= wd) return;
+        const Eigen::Vector2d start_pt = best_pt, start_n = best_n;
+        const std::size_t start_count = inl.size();
+        for (int pass = 0; pass < kRefinePasses; ++pass) {
+          wideBand(band);
+          if (wide_q.size() < 3) break;
+          Eigen::Vector2d c, dir;
+          fitLine(wide_q, c, dir);
+          Eigen::Vector2d nn(-dir.y(), dir.x());
+          if (nn.dot(best_n) < 0) nn = -nn;
+          const double cos_turn = nn.dot(best_n);
+          best_pt = c, best_n = nn;
+          if (cos_turn > kNoiseBandConverged) break;
+        }
+        allInliers();
+        if (inl.size() < start_count) {  // off the wall: back to the line it started from
+          best_pt = start_pt, best_n = start_n;
+          allInliers();
+        }
+      };
       for (int pass = 0; pass < 3; ++pass) {
         allInliers();
         if (q2.size() < 3 || pass == 2) break;
@@ -360,6 +444,8 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
         best_pt = c;
         best_n = Eigen::Vector2d(-dir.y(), dir.x());
       }
+      // A wall noisier than its band: refit in a band scaled to its noise.
+      fitInNoiseBand();
       // Then on while the refit line holds more inliers (kRefinePasses),
       // taken if it turned the wall by kConvergedTurnDeg or more. (A pass's
       // lists are swapped aside, not copied: the last pass's come back when
