@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstddef>
 #include <exception>
+#include <limits>
 #include <memory>
 #include <random>
 #include <vector>
@@ -80,7 +81,6 @@ constexpr double kConvergedTurnDeg = 0.5;
 constexpr double kNoiseStretch = 0.5, kNoiseBandSigmas = 2.5, kNoiseBandMax = 2.0;
 constexpr std::size_t kNoiseStretchPoints = 20;
 constexpr double kNoiseBandConverged = 0.9999996, kNoiseBandLeft = 0.05;
-constexpr double kNoiseBandTurnDeg = 0.5;
 
 // The sigma of Gaussian noise about a line that leaves `share` of the points
 // within a band of +-wd within +-wd/3 of the line: the share falls from 1
@@ -393,14 +393,15 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
       // Where the wall's own noise fills the inlier band (a depth camera's
       // wall 3-5 m off: sigma 1.5-2.5 cm against wall_distance's 3 cm), a
       // refit on the points within the band is drawn to the line it was cut
-      // with (see kRefinePasses), and the tilt left hides trim and recess. The
-      // noise is read off the inliers themselves (kNoiseStretch; the median
-      // of the stretches', where a leaf or trim fills one or two): where
-      // kNoiseBandSigmas sigma exceed the band, the line is refit in that
-      // wider band to convergence, and kept where it holds at least as many
-      // inliers (within wall_distance) as the line it started from (a band
-      // centred on the wall holds the most of its points); the inliers stay
-      // those within wall_distance. A quiet wall is left as it is.
+      // with (see kRefinePasses), and the tilt left hides trim and recess.
+      // The noise is read off the inliers themselves (kNoiseStretch; the
+      // median of the stretches', where a leaf or trim fills one or two):
+      // where the three refits left 5 % of a tilt or more (passesLeft), the
+      // line is refit in a band of kNoiseBandSigmas sigma to convergence,
+      // and kept where it holds at least as many inliers (within
+      // wall_distance) as the line it started from (a band centred on the
+      // wall holds the most of its points); the inliers stay those within
+      // wall_distance. A quiet wall is left as it is.
       auto fitInNoiseBand = [&] {
         std::vector<int> wide_in;
         std::vector<Eigen::Vector2d> wide_q;
@@ -413,18 +414,26 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
         // inliers or more: the share of them within a third of the band.
         const double wd = p.wall_distance;
         const Eigen::Vector2d along(best_n.y(), -best_n.x());
-        std::vector<std::pair<int, char>> dev(q2.size());
-        for (std::size_t k = 0; k < q2.size(); ++k) {
-          const Eigen::Vector2d r = q2[k] - best_pt;
-          dev[k] = {static_cast<int>(std::floor(r.dot(along) / kNoiseStretch)), std::abs(r.dot(best_n)) < wd / 3};
+        double s_min = std::numeric_limits<double>::infinity(), s_max = -s_min;
+        for (const Eigen::Vector2d& q : q2) {
+          const double sq = (q - best_pt).dot(along);
+          s_min = std::min(s_min, sq), s_max = std::max(s_max, sq);
         }
-        std::sort(dev.begin(), dev.end());
+        if (!(s_max - s_min < 1e4)) return;  // none, or no room's wall
+        const double k0 = std::floor(s_min / kNoiseStretch);
+        const std::size_t stretches = static_cast<std::size_t>(std::floor(s_max / kNoiseStretch) - k0) + 1;
+        std::vector<std::size_t> all(stretches, 0), inner(stretches, 0);
+        for (const Eigen::Vector2d& q : q2) {
+          const Eigen::Vector2d r = q - best_pt;
+          const double kf = std::floor(r.dot(along) / kNoiseStretch) - k0;
+          const std::size_t k = std::min(stretches - 1, static_cast<std::size_t>(std::max(0.0, kf)));
+          ++all[k];
+          inner[k] += std::abs(r.dot(best_n)) < wd / 3;
+        }
         std::vector<double> stretch_sigma;
-        for (std::size_t a = 0, b; a < dev.size(); a = b) {
-          std::size_t inner = 0;
-          for (b = a; b < dev.size() && dev[b].first == dev[a].first; ++b) inner += dev[b].second;
-          if (b - a >= kNoiseStretchPoints) stretch_sigma.push_back(sigmaOfInnerShare(static_cast<double>(inner) / (b - a), wd));
-        }
+        for (std::size_t k = 0; k < stretches; ++k)
+          if (all[k] >= kNoiseStretchPoints)
+            stretch_sigma.push_back(sigmaOfInnerShare(static_cast<double>(inner[k]) / all[k], wd));
         if (stretch_sigma.empty()) return;
         std::nth_element(stretch_sigma.begin(), stretch_sigma.begin() + stretch_sigma.size() / 2, stretch_sigma.end());
         const double sigma = stretch_sigma[stretch_sigma.size() / 2];
