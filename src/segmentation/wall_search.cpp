@@ -419,7 +419,7 @@ std::vector<WallPlane> findWalls(const Points& points, const Normals& normals, d
           const double sq = (q - best_pt).dot(along);
           s_min = std::min(s_min, sq), s_max = std::max(s_max, sq);
         }
-        if (!(s_max - s_min < 1e4)) return;  // none, or no room's wall
+        if (!(s_max >= s_min && s_max - s_min < 1e4)) return;  // none, or no room's wall
         const double k0 = std::floor(s_min / kNoiseStretch);
         const std::size_t stretches = static_cast<std::size_t>(std::floor(s_max / kNoiseStretch) - k0) + 1;
         std::vector<std::size_t> all(stretches, 0), inner(stretches, 0);
