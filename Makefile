@@ -80,7 +80,7 @@ eval-drive: build
 	  $(BIN)/door_state_drive_eval --sensor $$s --seeds $(DRIVE_SEEDS) --toggle auto --verbose >$(BUILD)/eval-drive/$$s-toggle.json 2>$(BUILD)/eval-drive/$$s-toggle.log || exit 1; \
 	  echo "$$s: figures in $(BUILD)/eval-drive/$$s.json and $$s-toggle.json"; done
 
-.PHONY: latency soak
+.PHONY: latency soak soak-drive
 # The nodelet's latency from cloud in (stamped at publish) to DoorStateArray
 # out, simulated clouds at 30 Hz (overload) and at a slow rate;
 # LATENCY_SECONDS per case (default 30). Figures in $(BUILD)/latency/.
@@ -91,6 +91,12 @@ latency: build
 # (default 600): clouds processed and dropped, latency, resident memory.
 soak: build
 	@$(REPO)/scripts/soak.sh
+
+# A simulated drive bag played in a loop (use_sim_time, the clock going back
+# at each loop) through the nodelet with tracked_doors, for SOAK_SECONDS
+# (default 1800): resident memory, tracks, the last tracked_doors of each loop.
+soak-drive: build
+	@$(REPO)/scripts/soak_drive.sh
 
 rviz-shot: build
 	@$(REPO)/scripts/rviz_shot.sh
