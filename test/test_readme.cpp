@@ -143,7 +143,7 @@ TEST(Readme, ParameterTableHasEveryParameterOfTheYamlAndTheCfgWithTheirDefaults)
     EXPECT_EQ(r->second.type, types.at(p.type)) << "~" << name;
   }
   // The nodelet's own parameters (those it checks by name at start).
-  const std::string nodelet = readFile(kSource + "/src/ros/door_state_nodelet.cpp");
+  const std::string nodelet = readFile(kSource + "/src/ros/nodelet_parameters.cpp");
   static const std::regex own(R"re(if \(name == "(\w+)"\))re");
   std::size_t own_count = 0;
   for (std::sregex_iterator it(nodelet.begin(), nodelet.end(), own), stop; it != stop; ++it, ++own_count) {
