@@ -33,21 +33,8 @@
 # with it, 8.4 Hz and 250 ms with 10000, one run each, 2026-11-25).
 set -euo pipefail
 REPO="$(cd "$(dirname "$0")/.." && pwd)"
-BUILD="${DSR_BUILD:-$REPO/build}"
-BIN="$BUILD/bin"
-OUT="$BUILD/latency"
+source "$REPO/scripts/nodelet_env.sh"
 SECS="${LATENCY_SECONDS:-30}"
-mkdir -p "$OUT"
-export PATH=/usr/bin:$PATH
-set +u; source "$BUILD/.ws/devel/setup.bash"; set -u
-export ROS_LOG_DIR="$OUT/log"
-if [ -z "${GOMP_SPINCOUNT:-}" ] && [ -z "${OMP_WAIT_POLICY:-}" ]; then export GOMP_SPINCOUNT=10000; fi
-# glibc malloc as door_state.launch sets it (util/keep_freed_memory.hpp), unless the environment sets it.
-if [ -z "${MALLOC_MMAP_THRESHOLD_:-}${MALLOC_TRIM_THRESHOLD_:-}${MALLOC_TOP_PAD_:-}${GLIBC_TUNABLES:-}" ]; then
-  export MALLOC_MMAP_THRESHOLD_=67108864 MALLOC_TRIM_THRESHOLD_=1073741824
-fi
-PORT="${LATENCY_ROS_PORT:-$((20000 + RANDOM % 20000))}"
-export ROS_MASTER_URI="http://localhost:$PORT"
 CASES=("$@")
 [ ${#CASES[@]} -gt 0 ] || CASES=(rgbd30 rgbddoor30 tls30 rgbd2 tls05 unload)
 
@@ -64,21 +51,10 @@ bag "$OUT/rgbd" --sensor rgbd --seed 7
 bag "$OUT/rgbd1001" --sensor rgbd --seed 1001
 
 CORE="" MGR="" LOADER="" FAILED=0
-stop() {  # stop PID: SIGINT, then wait for it (only processes this script started)
-  local pid="$1"
-  [ -n "$pid" ] || return 0
-  kill -INT "$pid" 2>/dev/null || true
-  for _ in $(seq 100); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
-  kill -KILL "$pid" 2>/dev/null || true
-  wait "$pid" 2>/dev/null || true
-}
 cleanup() { stop "$LOADER"; stop "$MGR"; stop "$CORE"; }
 trap cleanup EXIT
 
-roscore -p "$PORT" >"$OUT/roscore.log" 2>&1 &
-CORE=$!
-for _ in $(seq 150); do rosparam list >/dev/null 2>&1 && break; sleep 0.2; done
-rosparam list >/dev/null 2>&1 || { echo "nodelet_latency: roscore on port $PORT did not come up" >&2; exit 1; }
+start_roscore "$OUT/roscore.log"
 
 run() {  # run LABEL RATE SECONDS UP_AXIS FIXED_FRAME BAG...
   local label="$1" rate="$2" secs="$3" up="$4" fixed="$5"; shift 5

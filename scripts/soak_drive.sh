@@ -15,23 +15,10 @@
 # Figures in $DSR_BUILD/latency/soak_drive_<sensor>_<seed>.json, logs beside it.
 set -euo pipefail
 REPO="$(cd "$(dirname "$0")/.." && pwd)"
-BUILD="${DSR_BUILD:-$REPO/build}"
-BIN="$BUILD/bin"
-OUT="$BUILD/latency"
+source "$REPO/scripts/nodelet_env.sh"
 SECS="${SOAK_SECONDS:-1800}"
 SENSOR="${SOAK_SENSOR:-lidar64}"
 SEED="${SOAK_SEED:-3000}"
-mkdir -p "$OUT"
-export PATH=/usr/bin:$PATH
-set +u; source "$BUILD/.ws/devel/setup.bash"; set -u
-export ROS_LOG_DIR="$OUT/log"
-# The manager's environment as door_state.launch sets it (see nodelet_latency.sh).
-if [ -z "${GOMP_SPINCOUNT:-}" ] && [ -z "${OMP_WAIT_POLICY:-}" ]; then export GOMP_SPINCOUNT=10000; fi
-if [ -z "${MALLOC_MMAP_THRESHOLD_:-}${MALLOC_TRIM_THRESHOLD_:-}${MALLOC_TOP_PAD_:-}${GLIBC_TUNABLES:-}" ]; then
-  export MALLOC_MMAP_THRESHOLD_=67108864 MALLOC_TRIM_THRESHOLD_=1073741824
-fi
-PORT="${LATENCY_ROS_PORT:-$((20000 + RANDOM % 20000))}"
-export ROS_MASTER_URI="http://localhost:$PORT"
 [ -x "$BIN/door_scene_sim" ] || { echo "soak_drive: $BIN/door_scene_sim missing: run make build first" >&2; exit 2; }
 
 PREFIX="$OUT/drive_${SENSOR}_${SEED}"
@@ -39,21 +26,10 @@ PREFIX="$OUT/drive_${SENSOR}_${SEED}"
   "$BIN/door_scene_sim" --drive --sensor "$SENSOR" --seed "$SEED" --formats bag,json --out "$PREFIX"
 
 CORE="" MGR="" LOADER="" PLAYER=""
-stop() {  # stop PID: SIGINT, then wait for it (only processes this script started)
-  local pid="$1"
-  [ -n "$pid" ] || return 0
-  kill -INT "$pid" 2>/dev/null || true
-  for _ in $(seq 100); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
-  kill -KILL "$pid" 2>/dev/null || true
-  wait "$pid" 2>/dev/null || true
-}
 cleanup() { stop "$PLAYER"; stop "$LOADER"; stop "$MGR"; stop "$CORE"; }
 trap cleanup EXIT
 
-roscore -p "$PORT" >"$OUT/soak_drive.roscore.log" 2>&1 &
-CORE=$!
-for _ in $(seq 150); do rosparam list >/dev/null 2>&1 && break; sleep 0.2; done
-rosparam list >/dev/null 2>&1 || { echo "soak_drive: roscore on port $PORT did not come up" >&2; exit 1; }
+start_roscore "$OUT/soak_drive.roscore.log"
 rosparam set /use_sim_time true
 rosparam load "$REPO/config/default.yaml" /door_state
 rosparam set /door_state/fixed_frame map
