@@ -507,6 +507,33 @@ TEST_F(CloudReader, TextCloudsAndMeshesAsDatasetsAndScannersShipThem) {
   }
 }
 
+TEST_F(CloudReader, TextWithDecimalCommasAsEuropeanLocalesExportIt) {
+  // CloudCompare in a European locale: ';' between fields, ',' the decimal
+  // point; or tab-separated. Read as numbers, not as integers split at the commas.
+  const Cloud semi = readCloud(write("eu.txt", "-0,3868;0,8416;-1,5925\n2,5;3;4,25;0,5\n"));
+  ASSERT_EQ(semi.size(), 2u);
+  EXPECT_FLOAT_EQ(semi[0].x, -0.3868f);
+  EXPECT_FLOAT_EQ(semi[0].y, 0.8416f);
+  EXPECT_FLOAT_EQ(semi[0].z, -1.5925f);
+  EXPECT_EQ(semi[1].x, 2.5f);
+  EXPECT_EQ(semi[1].z, 4.25f);
+  const Cloud tab = readCloud(write("eu.xyz", "//X\tY\tZ\n1,5\t2,25\t-3,75\r\n"));
+  ASSERT_EQ(tab.size(), 1u);
+  EXPECT_EQ(tab[0].y, 2.25f);
+  EXPECT_EQ(tab[0].z, -3.75f);
+  // Commas between integers (or after a point) stay separators.
+  const Cloud ints = readCloud(write("ints.txt", "1,2,3\n4,5,6\n"));
+  ASSERT_EQ(ints.size(), 2u);
+  EXPECT_EQ(ints[1].x, 4.0f);
+  EXPECT_EQ(ints[1].z, 6.0f);
+  const Cloud dots = readCloud(write("dots.txt", "1.5,2,3\n"));
+  ASSERT_EQ(dots.size(), 1u);
+  EXPECT_EQ(dots[0].x, 1.5f);
+  EXPECT_EQ(dots[0].y, 2.0f);
+  // The first line of points decides for the file; a line read the other way is refused with its number.
+  EXPECT_READ_ERROR(write("mixed.txt", "1,5;2;3\n1,5,2,3\n"), "line 2");
+}
+
 TEST_F(CloudReader, NotAPointCloud) {
   EXPECT_READ_ERROR(write("text.pcd", "Dear diary,\ntoday I scanned a door.\n"), "not a point cloud file");
   const char png_bytes[] = "\x89PNG\r\n\x1a\n\0\0\0\rIHDR\0\0\0\x10\0\0\0\x10\x08\x06\0\0\0";

@@ -257,7 +257,8 @@ TEST(Tools, CliReadsAGeoreferencedCloudToTheMillimetre) {
   ASSERT_EQ(run("door_scene_sim --quiet --seed 7 --points 150000 --out " + (dir / "s").string()).code, 0);
   pcl::PointCloud<pcl::PointXYZ> c;
   ASSERT_EQ(pcl::io::loadPCDFile((dir / "s.pcd").string(), c), 0);
-  const double dx = 500000.0, dy = 5000000.0, dz = 120.0;
+  // Not round: a VIEWPOINT read in float32 lands up to 0.25 m off at 5e6 m.
+  const double dx = 512345.67, dy = 5432109.87, dz = 120.0;
   {
     std::ofstream out(dir / "utm.pcd");
     out << "VERSION .7\nFIELDS x y z\nSIZE 8 8 8\nTYPE F F F\nCOUNT 1 1 1\nWIDTH " << c.size() << "\nHEIGHT 1\n";
@@ -280,8 +281,19 @@ TEST(Tools, CliReadsAGeoreferencedCloudToTheMillimetre) {
     EXPECT_NEAR(y["hinge"][1].get<double>() - dy, x["hinge"][1].get<double>(), 0.05);
     EXPECT_NEAR(y["hinge"][2].get<double>() - dz, x["hinge"][2].get<double>(), 0.05);
   }
-  EXPECT_NEAR(jb["viewpoint"][0].get<double>(), dx + c.sensor_origin_.x(), 0.01);
+  for (int k = 0; k < 3; ++k)
+    EXPECT_NEAR(jb["viewpoint"][k].get<double>(), (k == 0 ? dx : k == 1 ? dy : dz) + c.sensor_origin_[k], 0.005) << k;
   EXPECT_NE(jb["warnings"].dump().find("far from their origin"), std::string::npos) << jb["warnings"];
+  // The same points as text (no VIEWPOINT): --viewpoint header has none to
+  // take, and says so (not "beyond max_abs_coordinate": the origin is).
+  {
+    std::ofstream out(dir / "utm.xyz");
+    out << std::fixed << std::setprecision(4);
+    for (const auto& p : c.points) out << p.x + dx << " " << p.y + dy << " " << p.z + dz << "\n";
+  }
+  const Result h = run("door_state_cli --quiet --viewpoint header " + (dir / "utm.xyz").string(), true);
+  EXPECT_EQ(h.code, 2) << h.out;
+  EXPECT_NE(h.out.find("has no VIEWPOINT"), std::string::npos) << h.out;
   fs::remove_all(dir);
 }
 

@@ -330,7 +330,11 @@ int main(int argc, char** argv) {
         for (const auto& t : result.trace) std::cerr << "door_state_cli: " << t << "\n";
       std::cerr << "door_state_cli: " << result.walls.size() << " wall(s), " << result.doors.size() << " door(s)";
       for (const auto& d : result.doors)
-        std::cerr << "; door " << d.id << " " << dsr::toString(d.state) << " " << static_cast<int>(d.opening_angle_deg + 0.5) << " deg";
+      {  // a tenth of a degree: rounding to whole ones put 89.8 (semi-open) at open's 90
+        char angle[32];
+        std::snprintf(angle, sizeof angle, "%.1f", d.opening_angle_deg);
+        std::cerr << "; door " << d.id << " " << dsr::toString(d.state) << " " << angle << " deg";
+      }
       std::cerr << "\ndoor_state_cli: timings (ms):";
       for (const auto& kv : result.timing_ms) std::cerr << " " << kv.first << " " << static_cast<int>(kv.second + 0.5);
       std::cerr << "\n";

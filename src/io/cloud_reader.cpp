@@ -393,6 +393,7 @@ pcl::PointCloud<pcl::PointXYZ> readPcd(Input& in, std::string line, Localizer& l
   pcl::PointCloud<pcl::PointXYZ> cloud;
   if (loc.frame) loc.frame->viewpoint_given = viewpoint.size() == 7 && (viewpoint[0] != 0 || viewpoint[1] != 0 || viewpoint[2] != 0);
   if (viewpoint.size() == 7) {
+    if (loc.frame) loc.frame->viewpoint = Eigen::Vector3d(viewpoint[0], viewpoint[1], viewpoint[2]);
     cloud.sensor_origin_ = Eigen::Vector4d(viewpoint[0], viewpoint[1], viewpoint[2], 0.0).cast<float>();
     cloud.sensor_orientation_ =
         Eigen::Quaterniond(viewpoint[3], viewpoint[4], viewpoint[5], viewpoint[6]).cast<float>();
@@ -491,6 +492,38 @@ std::vector<std::string_view> textFields(const std::string& line) {
   return out;
 }
 
+// The fields of a line written with decimal commas (a European locale's
+// export: "-0,39;0,84;-1,59", or the same tab-separated): split at spaces,
+// tabs and semicolons, each comma taken as the decimal point.
+std::vector<std::string> decimalCommaFields(const std::string& line) {
+  std::vector<std::string> out;
+  auto sep = [](char c) { return c == ' ' || c == '\t' || c == ';'; };
+  std::size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && sep(line[i])) ++i;
+    std::size_t j = i;
+    while (j < line.size() && !sep(line[j])) ++j;
+    if (j > i) {
+      std::string f = line.substr(i, j - i);
+      std::replace(f.begin(), f.end(), ',', '.');
+      out.push_back(std::move(f));
+    }
+    i = j;
+  }
+  return out;
+}
+
+// Whether a data line is written with decimal commas: no '.', some ',', and
+// split at spaces, tabs and semicolons only, three numbers or more once each
+// comma is a point, one of them with a comma ("1,5 2 3" too; "1, 2, 3" is
+// commas between integers: "1," is no number).
+bool decimalCommas(const std::string& line) {
+  if (line.find('.') != std::string::npos || line.find(',') == std::string::npos) return false;
+  const std::vector<std::string> f = decimalCommaFields(line);
+  double d;
+  return f.size() >= 3 && std::all_of(f.begin(), f.end(), [&](const std::string& v) { return parseDouble(v, d); });
+}
+
 bool skippedText(const std::string& line) {
   const std::size_t i = line.find_first_not_of(" \t");
   return i == std::string::npos || line[i] == '#' || line.compare(i, 2, "//") == 0;
@@ -528,13 +561,23 @@ pcl::PointCloud<pcl::PointXYZ> readText(Input& in, const std::string& first, Loc
       have = in.readLine(line), ++line_no;
     }
   }
+  // Decimal commas or not: decided on the first line of data, for the file.
+  std::optional<bool> comma;
   for (; have; have = in.readLine(line), ++line_no) {
     if (skippedText(line)) continue;
-    const std::vector<std::string_view> f = textFields(line);
+    if (!comma) comma = decimalCommas(line);
     double v[3];
-    if (f.size() < 3 || !parseDouble(f[0], v[0]) || !parseDouble(f[1], v[1]) || !parseDouble(f[2], v[2]))
-      in.fail("line " + std::to_string(line_no) + ": " + quote(line.substr(0, 80)) +
-              " does not begin with three numbers x y z");
+    bool ok;
+    if (*comma) {
+      const std::vector<std::string> f = decimalCommaFields(line);
+      ok = f.size() >= 3 && parseDouble(f[0], v[0]) && parseDouble(f[1], v[1]) && parseDouble(f[2], v[2]);
+    } else {
+      const std::vector<std::string_view> f = textFields(line);
+      ok = f.size() >= 3 && parseDouble(f[0], v[0]) && parseDouble(f[1], v[1]) && parseDouble(f[2], v[2]);
+    }
+    if (!ok)
+      in.fail("line " + std::to_string(line_no) + ": " + quote(line.substr(0, 80)) + " does not begin with three numbers x y z" +
+              (*comma ? " (read with decimal commas, as the first line of points is written)" : ""));
     appendPoint(in, cloud, loc(v[0], v[1], v[2]));
   }
   if (promised && *promised != cloud.points.size())
@@ -722,9 +765,11 @@ pcl::PointCloud<pcl::PointXYZ> readFrom(const std::string& name, MakeInput make,
     pcl::PointCloud<pcl::PointXYZ> cloud = first == "ply"            ? readPly(in, loc)
                                            : looksLikeText(first) ? readText(in, first, loc)
                                                                   : readPcd(in, first, loc);
-    // The VIEWPOINT in the frame the points were moved into (in double).
+    // The VIEWPOINT in the frame the points were moved into, from its value
+    // as read (in double: a float holds a georeferenced coordinate to a
+    // decimetre, the point's shifted coordinates to a millimetre).
     if (frame && !frame->shift.isZero())
-      cloud.sensor_origin_.head<3>() = (cloud.sensor_origin_.head<3>().cast<double>() - frame->shift).cast<float>();
+      cloud.sensor_origin_.head<3>() = (frame->viewpoint - frame->shift).cast<float>();
     finish(cloud);
     return cloud;
   } catch (const CloudReadError&) {

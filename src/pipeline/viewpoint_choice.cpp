@@ -31,6 +31,10 @@ void chooseViewpoints(const std::vector<InputCloud>& inputs, ViewpointMode mode,
                                                                      : in.cloud->sensor_origin_.head<3>().cast<double>();
     if (!vp.allFinite() || vp.cwiseAbs().maxCoeff() > p.max_abs_coordinate) {
       if (mode == ViewpointMode::Given) throw std::invalid_argument("--viewpoint lies beyond max_abs_coordinate");
+      if (!in.viewpoint_given && !shift.isZero())  // the origin of a georeferenced file, far from its points
+        throw std::invalid_argument(in.name + " has no VIEWPOINT (or 0 0 0) and lies far from the origin "
+                                    "(georeferenced): --viewpoint header has no position to take; use "
+                                    "--viewpoint auto, none or X,Y,Z");
       throw std::invalid_argument(in.name + ": VIEWPOINT lies beyond max_abs_coordinate or is not finite");
     }
     out.stations.push_back({in.cloud, vp});

@@ -30,6 +30,7 @@ struct CloudFrame {
   Eigen::Vector3d shift = Eigen::Vector3d::Zero();
   bool shift_given = false;
   bool viewpoint_given = false;  // the header's VIEWPOINT is present and not the origin
+  Eigen::Vector3d viewpoint = Eigen::Vector3d::Zero();  // the header's VIEWPOINT as read (double), before the shift
 };
 pcl::PointCloud<pcl::PointXYZ> readCloud(const std::string& path, CloudFrame* frame = nullptr);
 // The same from `size` bytes in memory (a file's content); `name` stands for
