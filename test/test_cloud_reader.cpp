@@ -534,6 +534,22 @@ TEST_F(CloudReader, TextWithDecimalCommasAsEuropeanLocalesExportIt) {
   EXPECT_READ_ERROR(write("mixed.txt", "1,5;2;3\n1,5,2,3\n"), "line 2");
 }
 
+TEST_F(CloudReader, TextWithAColumnHeaderLineAsSpreadsheetsWriteIt) {
+  const Cloud xyz = readCloud(write("h.xyz", "x y z\n1 2 3\n4 5 6\n"));
+  ASSERT_EQ(xyz.size(), 2u);
+  EXPECT_EQ(xyz[1].y, 5.0f);
+  // A UTF-8 byte order mark, names of more columns, CRLF.
+  const Cloud csv = readCloud(write("h.csv", "\xEF\xBB\xBFX,Y,Z,Red,Green,Blue\r\n1.5,2,3,0,0,0\r\n"));
+  ASSERT_EQ(csv.size(), 1u);
+  EXPECT_EQ(csv[0].x, 1.5f);
+  const Cloud semi = readCloud(write("h.txt", "X;Y;Z;Intensity\n-0,5;1,25;2;7\n"));
+  ASSERT_EQ(semi.size(), 1u);
+  EXPECT_EQ(semi[0].x, -0.5f);
+  // A header over something else is said so, and a bad line later counted from the file's start.
+  EXPECT_READ_ERROR(write("h_bad.txt", "x y z\nnot numbers here\n"), "names columns");
+  EXPECT_READ_ERROR(write("h_line.txt", "x y z\n1 2 3\n4 5\n"), "line 3");
+}
+
 TEST_F(CloudReader, NotAPointCloud) {
   EXPECT_READ_ERROR(write("text.pcd", "Dear diary,\ntoday I scanned a door.\n"), "not a point cloud file");
   const char png_bytes[] = "\x89PNG\r\n\x1a\n\0\0\0\rIHDR\0\0\0\x10\0\0\0\x10\x08\x06\0\0\0";

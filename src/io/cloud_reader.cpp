@@ -541,16 +541,30 @@ bool looksLikeText(const std::string& first) {
   return f.size() >= 3 && std::all_of(f.begin(), f.end(), [&](std::string_view v) { return parseDouble(v, d); });
 }
 
+// A line of column names before the points ("x y z", "X,Y,Z,R,G,B",
+// "X;Y;Z;Intensity"): three or more fields, each a name (a letter first;
+// letters, digits, '_', '-', '(' and ')'), the first no PCD or OBJ keyword.
+bool looksLikeColumnHeader(const std::string& line) {
+  const std::vector<std::string_view> f = textFields(line);
+  if (f.size() < 3 || f.size() > 64 || isPcdKeyword(f[0]) || isObjKeyword(f[0])) return false;
+  return std::all_of(f.begin(), f.end(), [](std::string_view v) {
+    return std::isalpha(static_cast<unsigned char>(v[0])) &&
+           std::all_of(v.begin(), v.end(), [](char c) {
+             return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '(' || c == ')';
+           });
+  });
+}
+
 // x y z and any further columns per line (S3DIS rooms' .txt, .xyz,
 // CloudCompare's ASCII export), optionally after a line holding the point
 // count alone (.pts); blank lines and lines starting with # or // (a column
 // header) are skipped. One cloud of the points in file order, unorganized.
-pcl::PointCloud<pcl::PointXYZ> readText(Input& in, const std::string& first, Localizer& loc) {
+pcl::PointCloud<pcl::PointXYZ> readText(Input& in, const std::string& first, Localizer& loc, u64 first_line_no = 1) {
   pcl::PointCloud<pcl::PointXYZ> cloud;
   cloud.height = 1;
   std::optional<u64> promised;
   std::string line = first;
-  u64 line_no = 1;
+  u64 line_no = first_line_no;
   bool have = true;
   {
     const std::vector<std::string_view> f = textFields(first);
@@ -761,10 +775,23 @@ pcl::PointCloud<pcl::PointXYZ> readFrom(const std::string& name, MakeInput make,
     // anything else is tried as PCD.
     std::string first;
     in.readLine(first);
+    if (first.compare(0, 3, "\xEF\xBB\xBF") == 0) first.erase(0, 3);  // a UTF-8 byte order mark
     Localizer loc(frame);
-    pcl::PointCloud<pcl::PointXYZ> cloud = first == "ply"            ? readPly(in, loc)
-                                           : looksLikeText(first) ? readText(in, first, loc)
-                                                                  : readPcd(in, first, loc);
+    pcl::PointCloud<pcl::PointXYZ> cloud;
+    if (first == "ply") {
+      cloud = readPly(in, loc);
+    } else if (looksLikeText(first)) {
+      cloud = readText(in, first, loc);
+    } else if (looksLikeColumnHeader(first)) {  // names of columns, then the points
+      std::string second;
+      in.readLine(second);
+      if (!looksLikeText(second))
+        in.fail("line 1 " + quote(first.substr(0, 80)) + " names columns, but line 2 " + quote(second.substr(0, 80)) +
+                " is not x y z");
+      cloud = readText(in, second, loc, 2);
+    } else {
+      cloud = readPcd(in, first, loc);
+    }
     // The VIEWPOINT in the frame the points were moved into, from its value
     // as read (in double: a float holds a georeferenced coordinate to a
     // decimetre, the point's shifted coordinates to a millimetre).
