@@ -217,6 +217,29 @@ TEST(Levelling, AGivenAxisTheSurfacesContradictIsWarnedOf) {
     }
 }
 
+TEST(Levelling, TheDefaultUpAlongACamerasOpticalAxisIsWarnedOf) {
+  // A camera frame in its optical frame run with the default up (+z, its
+  // optical axis): every axis of the room is square to the others, so the
+  // surfaces do not contradict it; the optical axis does. With -y or auto,
+  // or pitched 20 deg, no such warning.
+  auto optical = [](const PipelineResult& r) {
+    return std::any_of(r.warnings.begin(), r.warnings.end(),
+                       [](const std::string& w) { return w.find("optical axis") != std::string::npos; });
+  };
+  for (std::uint64_t seed = 3404; seed < 3407; ++seed) {
+    SCOPED_TRACE("seed=" + std::to_string(seed));
+    sim::RgbdOptions o;
+    o.seed = seed;
+    o.pitch_deg = -20.0;
+    const pcl::PointCloud<pcl::PointXYZ> cloud = xyz(sim::captureRgbd(sim::buildScene(sim::randomRoom(seed)), o).cloud);
+    for (const char* up : {"+z", "-y", "auto"}) {
+      Parameters q;
+      q.up_axis = up;
+      EXPECT_EQ(optical(Pipeline(q).run(cloud, false)), std::string(up) == "+z") << up;
+    }
+  }
+}
+
 TEST(Preprocess, SanitizeDropsNonFiniteAndAbsurdPoints) {
   pcl::PointCloud<pcl::PointXYZ> c;
   const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();

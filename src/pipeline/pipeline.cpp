@@ -137,6 +137,10 @@ constexpr float kSpacingReach = 0.2f;
 constexpr double kSparseVoxels = 2.4, kMaxSparseVoxel = 0.1;
 // The voxel grid kept this share of the points or more: maybe no denser than it.
 constexpr double kSparseKept = 0.8;
+// A given up axis this close to a camera frame's optical axis (deg) is
+// warned of: the camera would be pitched beyond 60 deg, looking at the
+// floor or the ceiling rather than across the room at its doors.
+constexpr double kAlongOpticalDeg = 30.0;
 
 double medianSpacing(const preprocess::Points& pts) {
   const segmentation::NeighbourGrid grid(pts, kSpacingReach / 2);
@@ -313,6 +317,22 @@ PipelineResult Pipeline::run(const pcl::PointCloud<pcl::PointXYZ>& cloud, bool w
                     "a sensor pitched or rolled further? try up axis auto",
                     *off, p.up_axis.c_str(), reach);
       res.warnings.push_back(buf);
+    } else if (camera) {
+      // A camera looks across a room, not straight up or down: a given up
+      // within kAlongOpticalDeg of its optical axis is the default +z on
+      // a frame in its optical frame (z forward, y down), whose room's
+      // axes the check above cannot tell apart (each is square to the others).
+      const Eigen::Vector3d optical = camera->ray(camera->cu, camera->cv);
+      const double deg = std::acos(std::min(1.0, std::abs(optical.dot(given->normalized())))) * 180.0 / M_PI;
+      if (deg < kAlongOpticalDeg) {
+        char buf[240];
+        std::snprintf(buf, sizeof buf,
+                      "the given up axis %s lies %.0f deg from this camera frame's optical axis (a camera looking "
+                      "straight up or down?): in a camera's optical frame (z forward, y down) up is -y; try up "
+                      "axis -y or auto",
+                      p.up_axis.c_str(), deg);
+        res.warnings.push_back(buf);
+      }
     }
   }
   if (const std::optional<std::string> why = singleSurface(pts, normals.n, viewpoint, p.up_axis != "auto"))
