@@ -606,4 +606,18 @@ TEST(Sight, CloudsWithoutRoomsGiveZeroDoorsAndAWarning) {
   Parameters small;
   small.max_points = 1000;
   EXPECT_THROW(Pipeline(small).runWithoutViewpoint(floor, false), std::invalid_argument);
+  // A merged room in millimetres read as metres: said so (not "no enclosed
+  // free space"); the same room in metres is not.
+  Merged m = merged(3200, 2, 100000);
+  const PipelineResult in_m = pipe.runWithoutViewpoint(m.cloud, false);
+  for (auto& q : m.cloud.points) q.getVector3fMap() *= 1000.0f;
+  const PipelineResult in_mm = pipe.runWithoutViewpoint(m.cloud, false);
+  auto says = [](const PipelineResult& r) {
+    return std::any_of(r.warnings.begin(), r.warnings.end(),
+                       [](const std::string& w) { return w.find("millimetres read as metres") != std::string::npos; });
+  };
+  EXPECT_TRUE(says(in_mm));
+  EXPECT_TRUE(in_mm.doors.empty());
+  EXPECT_FALSE(says(in_m));
+  EXPECT_FALSE(in_m.doors.empty());
 }

@@ -65,6 +65,37 @@ std::optional<std::string> implausibleInput(const pcl::PointCloud<pcl::PointXYZ>
   return std::nullopt;
 }
 
+std::optional<std::string> implausibleExtent(const pcl::PointCloud<pcl::PointXYZ>& cloud) {
+  std::vector<Eigen::Vector3f> pts;
+  std::size_t finite = 0;
+  for (const auto& p : cloud.points) finite += std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+  if (finite < 20) return std::nullopt;
+  const std::size_t stride = std::max<std::size_t>(1, finite / kSample);
+  std::size_t k = 0;
+  for (const auto& p : cloud.points)
+    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && k++ % stride == 0) pts.push_back(p.getVector3fMap());
+  // The points' spread about their middle (the median of each coordinate):
+  // the median distance to it, whatever frame or offset the cloud is in.
+  Eigen::Vector3f mid;
+  std::vector<float> c(pts.size());
+  for (int a = 0; a < 3; ++a) {
+    for (std::size_t i = 0; i < pts.size(); ++i) c[i] = pts[i][a];
+    std::nth_element(c.begin(), c.begin() + c.size() / 2, c.end());
+    mid[a] = c[c.size() / 2];
+  }
+  std::vector<double> d(pts.size());
+  for (std::size_t i = 0; i < pts.size(); ++i) d[i] = (pts[i] - mid).norm();
+  std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+  const double spread = d[d.size() / 2], limit = cloud.height > 1 ? kCameraMedianRangeMax : kScanMedianRangeMax;
+  if (spread <= limit) return std::nullopt;
+  char buf[300];
+  std::snprintf(buf, sizeof buf,
+                "the points lie %.0f m from their middle (median), more than any %s scene spans (%.0f m): "
+                "millimetres read as metres? (REP 103: metres); no doors",
+                spread, cloud.height > 1 ? "camera's" : "indoor", limit);
+  return std::string(buf);
+}
+
 std::optional<std::string> singleSurface(const std::vector<Eigen::Vector3f>& points,
                                          const std::vector<Eigen::Vector3f>& normals, const Eigen::Vector3f& viewpoint,
                                          bool up_given) {

@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "door_state_recognition/pipeline/input_checks.hpp"
 #include "door_state_recognition/pipeline/pipeline.hpp"
 #include "door_state_recognition/pipeline/report_groups.hpp"
 #include "door_state_recognition/pipeline/sight.hpp"
@@ -316,6 +317,13 @@ PipelineResult Pipeline::runWithoutViewpoint(const pcl::PointCloud<pcl::PointXYZ
   if (cloud.size() > static_cast<std::size_t>(params_.max_points))
     throw std::invalid_argument("cloud of " + std::to_string(cloud.size()) + " points exceeds max_points (" +
                                 std::to_string(params_.max_points) + ")");
+  if (const std::optional<std::string> why = implausibleExtent(cloud)) {
+    PipelineResult res;
+    res.points_in = cloud.size();
+    res.viewpoint.reset();
+    res.warnings.push_back(*why);
+    return res;
+  }
   const auto t0 = std::chrono::steady_clock::now();
   const sight::InferredStations inferred = sight::inferStations(cloud, params_);
   const double sight_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

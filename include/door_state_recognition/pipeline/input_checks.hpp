@@ -22,6 +22,11 @@ namespace dsr {
 // nullopt for a cloud that may be a scene (including an empty one).
 std::optional<std::string> implausibleInput(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vector3d& viewpoint);
 
+// The same for a cloud with no viewpoint: its points spread (median distance
+// from their middle) more than a camera frame (30 m) or a building's
+// indoors (1000 m) spans: millimetres read as metres.
+std::optional<std::string> implausibleExtent(const pcl::PointCloud<pcl::PointXYZ>& cloud);
+
 // A warning when one plane holds nearly all the (levelled) points: only a
 // floor in view, only a ceiling, or one surface close up (a wall within
 // 1.5 m), too little of a scene to tell a doorway. `normals` pairs with
