@@ -545,6 +545,11 @@ TEST_F(CloudReader, TextWithAColumnHeaderLineAsSpreadsheetsWriteIt) {
   const Cloud semi = readCloud(write("h.txt", "X;Y;Z;Intensity\n-0,5;1,25;2;7\n"));
   ASSERT_EQ(semi.size(), 1u);
   EXPECT_EQ(semi[0].x, -0.5f);
+  // # comment lines first (a PCD's header starts so too).
+  const Cloud commented = readCloud(write("c.xyz", "# exported by a scanner\n# units: m\n1 2 3\n4 5 6\n"));
+  ASSERT_EQ(commented.size(), 2u);
+  EXPECT_EQ(commented[1].z, 6.0f);
+  EXPECT_READ_ERROR(write("c_bad.xyz", "# exported\n1 2 3\n4 5\n"), "line 3");
   // A header over something else is said so, and a bad line later counted from the file's start.
   EXPECT_READ_ERROR(write("h_bad.txt", "x y z\nnot numbers here\n"), "names columns");
   EXPECT_READ_ERROR(write("h_line.txt", "x y z\n1 2 3\n4 5\n"), "line 3");

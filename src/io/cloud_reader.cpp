@@ -293,19 +293,27 @@ bool isPcdKeyword(std::string_view k) {
 
 // `line` holds the file's first line, already read (an OBJ's first
 // keyword after its comments hands it to readObj).
+// Text clouds (below): a PCD's first lines may turn out to be a text cloud's comments.
+bool looksLikeText(const std::string& first);
+pcl::PointCloud<pcl::PointXYZ> readText(Input& in, const std::string& first, Localizer& loc, u64 first_line_no = 1);
+
 pcl::PointCloud<pcl::PointXYZ> readPcd(Input& in, std::string line, Localizer& loc) {
   std::vector<std::string> names, sizes, types, counts;
   std::string width_s, height_s, points_s, data;
   std::vector<double> viewpoint;
   std::vector<std::string> seen;
   bool first = true;
+  u64 line_no = 0;  // of `line`
   for (bool have = true; data.empty(); have = false) {
     if (!have && !in.readLine(line))
       in.fail(first ? "not a point cloud file (no PCD or PLY header, nor lines of x y z)" : "PCD header has no DATA line");
+    ++line_no;
     auto tok = split(line);
     if (tok.empty() || tok[0][0] == '#') continue;
     std::string key(tok[0]);
     if (first && isObjKeyword(key)) return readObj(in, line, loc);
+    // A text cloud after # comment lines ("# exported by ...").
+    if (first && looksLikeText(line)) return readText(in, line, loc, line_no);
     if (!isPcdKeyword(key))
       in.fail(first ? "not a point cloud file (no PCD or PLY header, nor lines of x y z)"
                     : "unknown PCD header line " + quote(line));
@@ -559,7 +567,7 @@ bool looksLikeColumnHeader(const std::string& line) {
 // CloudCompare's ASCII export), optionally after a line holding the point
 // count alone (.pts); blank lines and lines starting with # or // (a column
 // header) are skipped. One cloud of the points in file order, unorganized.
-pcl::PointCloud<pcl::PointXYZ> readText(Input& in, const std::string& first, Localizer& loc, u64 first_line_no = 1) {
+pcl::PointCloud<pcl::PointXYZ> readText(Input& in, const std::string& first, Localizer& loc, u64 first_line_no) {
   pcl::PointCloud<pcl::PointXYZ> cloud;
   cloud.height = 1;
   std::optional<u64> promised;
