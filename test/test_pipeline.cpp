@@ -2011,6 +2011,7 @@ TEST(Parameters, AbsurdValuesAreRefusedWithTheirName) {
            {"wall_distance: .nan\n", "wall_distance"},
            {"up_axis: sideways\n", "up_axis"},
            {"no_such_parameter: 1\n", "no_such_parameter"},
+           {"voxel_size: 0.02\nwall_distance: 0.03\nvoxel_size: 0.05\n", "voxel_size' is given twice"},
            {"normal_k: many\n", "normal_k"}}) {
     try {
       loadText(text);

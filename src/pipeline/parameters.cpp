@@ -6,6 +6,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <set>
 #include <stdexcept>
 #include <type_traits>
 
@@ -191,10 +192,13 @@ namespace {
 Parameters fromNode(const YAML::Node& root, Parameters p, const std::string& path) {
   if (!root || root.IsNull()) return p;
   if (!root.IsMap()) throw std::invalid_argument(path + ": expected a map of parameter: value");
+  std::set<std::string> given;
   for (const auto& kv : root) {
     const std::string key = kv.first.as<std::string>();
     const auto it = fields().find(key);
     if (it == fields().end()) throw std::invalid_argument(path + ": unknown parameter '" + key + "'");
+    // Two values for one parameter: which was meant is not for us to guess.
+    if (!given.insert(key).second) throw std::invalid_argument(path + ": parameter '" + key + "' is given twice");
     try {
       it->second.read(p, kv.second);
     } catch (const std::exception&) {
