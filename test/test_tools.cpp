@@ -245,6 +245,14 @@ TEST(Tools, CliRefusesAnOutputThatIsAnInput) {
   }
   EXPECT_EQ(slurp(a), before);
   EXPECT_FALSE(fs::exists(dir / "o"));
+  // One file twice is no survey; an unknown axis is a usage error (with the usage).
+  const Result twice = run("door_state_cli " + a + " " + (dir / "." / "a.pcd").string(), true);
+  EXPECT_EQ(twice.code, 2);
+  EXPECT_NE(twice.out.find("is given twice"), std::string::npos) << twice.out;
+  const Result axis = run("door_state_cli --up q " + a, true);
+  EXPECT_EQ(axis.code, 2);
+  EXPECT_NE(axis.out.find("--up needs an axis"), std::string::npos) << axis.out;
+  EXPECT_NE(axis.out.find("usage:"), std::string::npos) << axis.out;
   fs::remove_all(dir);
 }
 

@@ -59,7 +59,6 @@ options:
   --zeros                LiDAR: (0, 0, 0) instead of NaN where no return
   --mount-height M       LiDAR head (0.4-1.2 m) or, with --drive, camera (0.3-1.5 m)
                          height above the floor (default: drawn by the seed)
-  --dropout P            probability of a lost return (default TLS 0, RGB-D 0.02)
   --depth-model M        RGB-D depth error of a camera family (src/sim/depth_models.cpp):
                          default (Kinect-like axial noise, as before), structured
                          (Kinect v1-like: 1/8 px disparity steps, projector shadows,

@@ -2,6 +2,7 @@
 // writes the report JSON.
 #include <pcl/io/ply_io.h>
 
+#include <algorithm>
 #include <cctype>
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -13,6 +14,7 @@
 #include <cstring>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <optional>
 #include <string>
 #include <vector>
@@ -168,7 +170,9 @@ int main(int argc, char** argv) {
       } else if (a == "--config") config = once(a, config, value());
       else if (a == "--up") {
         up = once(a, up, value());
-        if (up.empty()) throw UsageError("--up needs an axis (+z, -z, +y, -y, +x, -x or auto), got ''");
+        static const char* kAxes[] = {"+z", "-z", "+y", "-y", "+x", "-x", "auto"};
+        if (std::none_of(std::begin(kAxes), std::end(kAxes), [&](const char* x) { return up == x; }))
+          throw UsageError("--up needs an axis (+z, -z, +y, -y, +x, -x or auto), got '" + up + "'");
       }
       else if (a == "--viewpoint") {
         viewpoint_arg = value();
@@ -195,6 +199,10 @@ int main(int argc, char** argv) {
       else inputs.push_back(a);
     }
     if (inputs.empty()) throw UsageError("INPUT is missing");
+    // One file given twice is no survey of two stations (a shell glob and a name).
+    for (std::size_t k = 0; k < inputs.size(); ++k)
+      for (std::size_t j = 0; j < k; ++j)
+        if (samePath(inputs[k], inputs[j])) throw UsageError("INPUT " + inputs[k] + " is given twice");
     if (viewpoint_xyz && inputs.size() > 1)
       throw UsageError("--viewpoint X,Y,Z is one position: with several INPUTs give auto, header or none");
     // An output that is an INPUT or another output would destroy the scan
