@@ -73,6 +73,7 @@ InferredStations inferStations(const pcl::PointCloud<pcl::PointXYZ>& cloud, cons
   {
     constexpr float kCell = 0.1f, kClearance = 0.3f;
     constexpr int kRays = 36, kMinEnclosed = 31;
+    constexpr float kFloorBand = 0.1f, kFloorFrom = 0.6f, kFloorTo = 2.0f, kMinFloorSeen = 0.8f, kFloorExtent = 0.1f;
     const int nx = static_cast<int>(std::ceil((x1 - x0) / kCell)) + 1, ny = static_cast<int>(std::ceil((y1 - y0) / kCell)) + 1;
     std::vector<char> occupied(static_cast<std::size_t>(nx) * ny, 0);
     auto cellOf = [&](float x, float y, int& i, int& j) {
@@ -127,20 +128,45 @@ InferredStations inferStations(const pcl::PointCloud<pcl::PointXYZ>& cloud, cons
         }
       return true;
     };
+    // Floor seen: a scanner sees the floor around where it stands, out to
+    // the first wall or furniture; a position in a room seen only through
+    // its doorways (the floor there seen in a few wedges) is no station's.
+    // (Where the cloud holds no floor to speak of, cut away or never
+    // scanned, over less than kFloorExtent of its extent: not asked.)
+    std::vector<char> floor_seen(static_cast<std::size_t>(nx) * ny, 0);
+    std::size_t floor_cells = 0;
+    for (const auto& x : lev.p) {
+      int i, j;
+      if (std::abs(x.z() - z0) <= kFloorBand && cellOf(x.x(), x.y(), i, j)) {
+        char& f = floor_seen[static_cast<std::size_t>(j) * nx + i];
+        floor_cells += !f;
+        f = 1;
+      }
+    }
+    const bool ask_floor = static_cast<double>(floor_cells) >= kFloorExtent * static_cast<double>(floor_seen.size());
     std::vector<Eigen::Vector3f> kept;
     for (const auto& c : cand) {
       if (!clearAt(c)) continue;
-      int enclosed = 0;
+      // Rays free for kFloorFrom or more: on each, floor seen between
+      // kFloorFrom and kFloorTo or the first structure.
+      int enclosed = 0, free_rays = 0, floor_hits = 0;
       for (int r = 0; r < kRays; ++r) {
         const float a = static_cast<float>(2 * kPi * r / kRays), dx = std::cos(a) * kCell / 2, dy = std::sin(a) * kCell / 2;
-        int i, j;
-        for (float x = c.x(), y = c.y(); cellOf(x, y, i, j); x += dx, y += dy)
+        int i, j, step = 0;
+        bool hit = false, floor_on_ray = false;
+        float reach = 0;
+        for (float x = c.x(), y = c.y(); cellOf(x, y, i, j); x += dx, y += dy, ++step) {
+          reach = step * kCell / 2;
           if (occupied[static_cast<std::size_t>(j) * nx + i]) {
-            ++enclosed;
+            hit = true;
             break;
           }
+          if (reach >= kFloorFrom && reach <= kFloorTo && floor_seen[static_cast<std::size_t>(j) * nx + i]) floor_on_ray = true;
+        }
+        enclosed += hit;
+        if (reach >= kFloorFrom + kCell) ++free_rays, floor_hits += floor_on_ray;
       }
-      if (enclosed >= kMinEnclosed) kept.push_back(c);
+      if (enclosed >= kMinEnclosed && (!ask_floor || floor_hits >= kMinFloorSeen * free_rays)) kept.push_back(c);
     }
     cand.swap(kept);
   }
