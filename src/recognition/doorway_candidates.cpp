@@ -92,7 +92,7 @@ void DoorwaySearch::measureCandidates() {
       }
     const int c0 = std::max(0, static_cast<int>((d.s0 - s_lo) / cell) + 1);
     const int c1 = std::min(cols - 1, static_cast<int>((d.s1 - s_lo) / cell) - 1);
-    int n = 0, f = 0, t = 0, fr = 0, re = 0, low_through = 0;
+    int n = 0, f = 0, t = 0, fr = 0, re = 0, low_through = 0, low_seen = 0, low_past = 0;
     for (int c = c0; c <= c1; ++c)
       for (int r = body0; r < body1; ++r) {
         const Cell& g = grid[static_cast<std::size_t>(r) * cols + c];
@@ -105,8 +105,11 @@ void DoorwaySearch::measureCandidates() {
         else if (g.front) ++fr;
         else if (empty_seen) ++t;  // a camera got nothing back in range: nothing is there
         low_through += through && r < low1;
+        low_seen += r < low1 && (g.face || g.through || g.recess || g.front || empty_seen);
+        low_past += r < low1 && !g.face && (through || g.recess);
       }
     d.low_through = low_through > 0;
+    d.low_past_share = low_seen > 0 ? static_cast<double>(low_past) / low_seen : 0.0;
     n = f + t + fr + re;  // observed cells
     if (n > 0) {
       d.face = static_cast<double>(f) / n;

@@ -50,6 +50,9 @@ constexpr double kRecessBackMax = 0.3, kRecessBackBand = 0.02, kRecessBackShare 
 constexpr double kRevealBand = 0.04;
 // A wall whose inliers are more than this share another door's leaf is that leaf.
 constexpr double kLeafWallShare = 0.3;
+// Of a doorway's observed body cells below 0.8 m, the share seen past its
+// plane without which a leaf out of sight is not bounded (see open_unseen).
+constexpr double kUnseenLowPast = 0.15;
 // m: a doorway is an opening in its wall, the wall's face on both sides or
 // at least as far as its jambs; one reaching this far past the wall's last
 // point is not in that wall (past the corner of a cupboard's side, the
@@ -354,7 +357,12 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
         const double reach = (d.s1 - d.s0) * std::sin(std::min(leaf.free_from_deg, 90.0) * M_PI / 180);
         room_for_leaf = !(beyond < reach - kRoomSlack);
       }
-      const bool open_unseen = bounded && room_for_leaf;
+      // And a doorway reaches the floor: where its leaf is out of sight, the
+      // rays must pass its plane low down too (of its observed cells below
+      // 0.8 m, kUnseenLowPast seen through or just behind). A window seen
+      // through above a sill, or above furniture before the wall, does not.
+      const bool reaches_floor = d.low_past_share >= kUnseenLowPast;
+      const bool open_unseen = bounded && room_for_leaf && reaches_floor;
       if (!leaf.found) {
         char buf[512];
         std::snprintf(buf, sizeof buf,
@@ -366,6 +374,7 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
                       leaf.best_angle_deg, leaf.best_coverage, leaf.best_contradiction, leaf.crowd_before,
                       leaf.candidate_points, leaf.candidate_rays, leaf.free_from_deg, open_unseen     ? " | leaf unseen, reported at the bound"
                       : !room_for_leaf ? " | no room behind it for a leaf out of sight"
+                      : bounded        ? " | seen past only above its lower body: no doorway to the floor"
                                        : "");
         out.trace.push_back(buf);
         if (!open_unseen) continue;
@@ -481,10 +490,10 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
         char buf[512];
         std::snprintf(buf, sizeof buf,
                       "wall %zu: doorway s=[%.2f, %.2f] casing=%d face=%.2f through=%.2f front=%.2f recess=%.2f "
-                      "setback=%.2f top=%.2f thick=%.2f | leaf found=%d band=%d angle=%.1f cov=%.2f explains=%.2f "
+                      "setback=%.2f top=%.2f thick=%.2f lowpast=%.2f | leaf found=%d band=%d angle=%.1f cov=%.2f explains=%.2f "
                       "foot=%.2f/%.2f furnished=%.2f hinge_s0=%d toward=%d handle=%d | %s",
                       wi, d.s0, d.s1, d.casing, d.face, d.through, d.front, d.recess, d.set_back, d.top - floor_z,
-                      d.thickness, leaf.found, leaf.closed_in_band, leaf.angle_deg, leaf.coverage, leaf.occluders_explained,
+                      d.thickness, d.low_past_share, leaf.found, leaf.closed_in_band, leaf.angle_deg, leaf.coverage, leaf.occluders_explained,
                       foot.seen, foot.blocked, furnished, leaf.hinge_at_s0, leaf.toward_viewer, leaf.handle_points,
                       !evidence ? "rejected: no casing, recess, see-through or own leaf hiding it"
                       : !free_foot ? "rejected: foot hidden by something right in front"

@@ -50,6 +50,9 @@ struct Doorway {
   // Some body cell below 0.8 m above the floor is seen through: the opening
   // reaches down to where a window's sill would stand.
   bool low_through = false;
+  // Of the observed body cells below 0.8 m, those without face seen through
+  // or just behind the plane (a leaf swung away near its hinge).
+  double low_past_share = 0;
   double set_back = 0;     // found as a panel this far behind the wall above and beside it (0: not so found)
   // Found only as the sensor-near end of a shadow wider than any door (a
   // leaf swung towards the sensor): its far jamb is a guess, and only that
