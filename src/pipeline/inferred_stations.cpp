@@ -81,9 +81,15 @@ InferredStations inferStations(const pcl::PointCloud<pcl::PointXYZ>& cloud, cons
       j = static_cast<int>(std::floor((y - y0) / kCell));
       return i >= 0 && j >= 0 && i < nx && j < ny;
     };
+    // Floor seen (below): the cells holding a point within kFloorBand of the floor.
+    std::vector<char> floor_seen(occupied.size(), 0);
+    std::size_t floor_cells = 0;
     for (const auto& x : lev.p) {
       int i, j;
-      if (std::abs(x.z() - zs) <= 0.6f && cellOf(x.x(), x.y(), i, j)) occupied[static_cast<std::size_t>(j) * nx + i] = 1;
+      if (!cellOf(x.x(), x.y(), i, j)) continue;
+      const std::size_t k = static_cast<std::size_t>(j) * nx + i;
+      if (std::abs(x.z() - zs) <= 0.6f) occupied[k] = 1;
+      if (std::abs(x.z() - z0) <= kFloorBand) floor_cells += !floor_seen[k], floor_seen[k] = 1;
     }
     // Free: only points in a band a little wider than kClearance around
     // the height can be that close; they are bucketed in columns of that
@@ -133,16 +139,6 @@ InferredStations inferStations(const pcl::PointCloud<pcl::PointXYZ>& cloud, cons
     // its doorways (the floor there seen in a few wedges) is no station's.
     // (Where the cloud holds no floor to speak of, cut away or never
     // scanned, over less than kFloorExtent of its extent: not asked.)
-    std::vector<char> floor_seen(static_cast<std::size_t>(nx) * ny, 0);
-    std::size_t floor_cells = 0;
-    for (const auto& x : lev.p) {
-      int i, j;
-      if (std::abs(x.z() - z0) <= kFloorBand && cellOf(x.x(), x.y(), i, j)) {
-        char& f = floor_seen[static_cast<std::size_t>(j) * nx + i];
-        floor_cells += !f;
-        f = 1;
-      }
-    }
     const bool ask_floor = static_cast<double>(floor_cells) >= kFloorExtent * static_cast<double>(floor_seen.size());
     std::vector<Eigen::Vector3f> kept;
     for (const auto& c : cand) {
