@@ -175,6 +175,17 @@ struct LeafSearch {
   static constexpr double kCrowdSlab = 0.1, kCrowdFromHinge = 0.1, kCrowdToTip = 0.05;
   static constexpr double kCrowdFromDeg = 30, kCrowdShare = 0.5;
   double crowdBefore(double angle_deg, double len) const;
+  // A leaf is as wide as its doorway. An open leaf measured shorter than
+  // kRestFromShare of a doorway framed by trim, whose rest (from
+  // kRestMargin past its measured tip to the doorway's width, at the same
+  // hinge and angle) rays went through in kRestSeenThrough of its cells or
+  // more, is no leaf but something shorter standing at the jamb: a
+  // cupboard's side, seen past (LeafFit::rest_seen_through). A leaf seen in
+  // part is hidden in the rest (behind its jamb, furniture, the view's edge).
+  // Over the tuning sweeps (merged, mesh-like, single laser scans) such
+  // "leaves" had 0.40-0.99 of their rest seen through, true leaves at most 0.10.
+  static constexpr double kRestFromShare = 0.65, kRestMargin = 0.1, kRestSeenThrough = 0.3;
+  double restSeenThrough(double angle_deg, double len, double span) const;
   double s_h = 0, s_other = 0, e0 = 0, m = 0, d_h = 0;
   Eigen::Vector2d toXY(double s, double d) const;
 };

@@ -34,6 +34,20 @@ double LeafSearch::crowdBefore(double angle_deg, double len) const {
   return in_band > 0 ? static_cast<double>(before) / in_band : 0.0;
 }
 
+double LeafSearch::restSeenThrough(double angle_deg, double len, double span) const {
+  const int first = static_cast<int>(std::ceil((len + kRestMargin) / abin - 1e-9));
+  const int last = std::min(na_max, static_cast<int>(std::floor(std::min(span, Lmax) / abin + 1e-9)));  // exclusive
+  // The doorway's span is the leaf's length only where trim frames it (a
+  // doorway without trim may hold a leaf's shadow on its wall).
+  if (!door.casing || len >= kRestFromShare * span || last - first < 2) return 0.0;
+  HingeRun w;
+  w.s_h = s_h, w.d_h = d_h, w.e0 = e0, w.m = m, w.start = angle_deg, w.step = 1, w.count = 1;
+  scoreRays(w, nullptr);
+  int crossed = 0;
+  for (int ab = first; ab < last; ++ab) crossed += w.con[static_cast<std::size_t>(ab)];
+  return static_cast<double>(crossed) / (static_cast<double>(last - first) * nz);
+}
+
 void LeafSearch::measureLeaf() {
   fit.best_angle_deg = best_deg;
   fit.best_coverage = gen_cov;
@@ -144,7 +158,9 @@ void LeafSearch::measureLeaf() {
     fit.crowd_before = crowdBefore(angle, len);
     const bool in_volume = angle >= kCrowdFromDeg && fit.crowd_before >= kCrowdShare;
     const bool covered = cov >= min_cov || (sure_doorway && cov >= 0.5 * min_cov && gen_contra <= 0.05) || cut_by_view;
-    if (covered && !in_volume) {
+    fit.rest_seen_through = restSeenThrough(angle, len, std::abs(s_other - s_h));
+    const bool seen_past_tip = fit.rest_seen_through >= kRestSeenThrough;
+    if (covered && !in_volume && !seen_past_tip) {
       fit.found = true;
       fit.coverage = cov;
       fit.angle_deg = angle;

@@ -51,6 +51,12 @@ struct LeafFit {
   // in its band (a plane through a shelf unit's contents: as many; a leaf:
   // none). Above 0.5 at 30 deg or more the leaf is not taken.
   double crowd_before = 0;
+  // An open leaf measured shorter than its doorway: the share of the cells
+  // of the rest of a leaf as long as the doorway is wide (past the measured
+  // tip, at the same hinge and angle) that rays went through. A leaf seen
+  // in part is hidden in the rest (by its jamb, furniture, the view's
+  // edge); a cupboard's side at the jamb is seen past. 0 when not computed.
+  double rest_seen_through = 0;
   // How densely the scan samples surfaces at the doorway: the share of the
   // 5 x 10 cm cells of the wall's face beside it (0.15-0.6 m beyond either
   // jamb, the better side) holding points, over kDenseWallCover, clamped to
