@@ -6,7 +6,7 @@ the merged figures as JSON (plus one line per scene with --verbose).
   scripts/eval_sweep.py [--sensor tls|rgbd|lidar16|lidar32|lidar64|lidar128] [--scenes N] [--first-seed S]
                         [--points N] [--viewpoints K] [--beyond-doors] [--no-handles] [--up AXIS] [--config FILE] [--jobs J]
                         [--merge] [--mesh-like N] [--voxel-map RES] [--clutter] [--partition] [--corridor]
-                        [--varied-doors]
+                        [--varied-doors] [--frame-offset X,Y,Z]
                         [--depth-model M] [--robot-camera] [--verbose] [--out DIR]
 
 With --merge or --mesh-like the CLI gets the one merged cloud (VIEWPOINT 0 0 0,
@@ -28,6 +28,7 @@ def one(args, seed, out):
     sim += ["--varied-doors"] if args.varied_doors else []
     merged = args.merge or args.mesh_like > 0 or args.voxel_map > 0
     sim += ["--merge"] if args.merge else []
+    sim += ["--frame-offset", args.frame_offset] if args.frame_offset else []
     sim += ["--mesh-like", str(args.mesh_like)] if args.mesh_like > 0 else []
     sim += ["--voxel-map", str(args.voxel_map)] if args.voxel_map > 0 else []
     if args.sensor == "rgbd":
@@ -56,6 +57,9 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--sensor", default="tls", choices=["tls", "rgbd", "lidar16", "lidar32", "lidar64", "lidar128"])
     ap.add_argument("--scenes", type=int, default=30)
+    ap.add_argument("--frame-offset", metavar="X,Y,Z", default="",
+                    help="each cloud moved by this offset in its frame (door_scene_sim --frame-offset): "
+                         "the same scans, the voxel grid cutting them elsewhere")
     ap.add_argument("--first-seed", type=int, default=1000)
     ap.add_argument("--points", type=int, default=400000)
     ap.add_argument("--noise", type=float, default=0.005)

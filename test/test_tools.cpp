@@ -659,3 +659,37 @@ TEST(Tools, SimulatorWritesAnOrganizedLidarSweep) {
   EXPECT_EQ(clouds, 3);
   fs::remove_all(dir);
 }
+
+TEST(Tools, SimulatorMovesTheSameScanByAFrameOffset) {
+  // --frame-offset: the same frame, every point, the VIEWPOINT and the
+  // truth moved by the offset (NaN pixels stay NaN); malformed offsets and
+  // a bag (whose tf puts the sensor at the frame's origin) refused.
+  const fs::path dir = tempDir("offset");
+  const std::string a = (dir / "a").string(), b = (dir / "b").string();
+  ASSERT_EQ(run("door_scene_sim --sensor rgbd --seed 4 --quiet --out " + a).code, 0);
+  ASSERT_EQ(run("door_scene_sim --sensor rgbd --seed 4 --quiet --frame-offset 1.5,-2,0.25 --out " + b).code, 0);
+  pcl::PointCloud<pcl::PointXYZ> ca, cb;
+  ASSERT_EQ(pcl::io::loadPCDFile(a + ".pcd", ca), 0);
+  ASSERT_EQ(pcl::io::loadPCDFile(b + ".pcd", cb), 0);
+  ASSERT_EQ(ca.size(), cb.size());
+  EXPECT_EQ(cb.height, ca.height);
+  const Eigen::Vector3f o(1.5f, -2.0f, 0.25f);
+  std::size_t finite = 0;
+  for (std::size_t i = 0; i < ca.size(); ++i) {
+    EXPECT_EQ(std::isfinite(ca[i].x), std::isfinite(cb[i].x)) << i;
+    if (!std::isfinite(ca[i].x)) continue;
+    ++finite;
+    EXPECT_LT((cb[i].getVector3fMap() - ca[i].getVector3fMap() - o).norm(), 1e-5f) << i;
+  }
+  EXPECT_GT(finite, ca.size() / 2);
+  EXPECT_LT((cb.sensor_origin_.head<3>() - o).norm(), 1e-6f);
+  const nlohmann::json ta = nlohmann::json::parse(slurp(a + ".json")), tb = nlohmann::json::parse(slurp(b + ".json"));
+  ASSERT_EQ(ta["doors"].size(), tb["doors"].size());
+  for (std::size_t k = 0; k < ta["doors"].size(); ++k)
+    for (int j = 0; j < 3; ++j)
+      EXPECT_NEAR(tb["doors"][k]["hinge"][j].get<double>() - ta["doors"][k]["hinge"][j].get<double>(), o[j], 1e-6);
+  EXPECT_EQ(run("door_scene_sim --out /tmp/x --frame-offset 1,2").code, 2);
+  EXPECT_EQ(run("door_scene_sim --out /tmp/x --frame-offset 1,2,nan").code, 2);
+  EXPECT_EQ(run("door_scene_sim --out /tmp/x --frame-offset 1,2,3 --formats bag").code, 2);
+  fs::remove_all(dir);
+}

@@ -86,6 +86,10 @@ options:
                          z = 0, origin on the floor 0.5-2 m beyond the outer corner
                          of walls 3 and 0, yaw by the seed: no scanner stood at
                          0 0 0); station0: the first station's frame
+  --frame-offset X,Y,Z   the written cloud (and its VIEWPOINT, the truth, the
+                         station files) moved by this offset (metres) in its own
+                         frame: the same scan in a frame not at the sensor, whose
+                         voxel grid cuts it elsewhere (not with --zeros or bag)
   --mesh-like N          TLS: the merged cloud resampled as about N vertices of a
                          reconstructed mesh (Poisson-disk spacing, holes, rounded
                          corners, 2 mm noise); implies --merge; no station files
@@ -163,6 +167,7 @@ int main(int argc, char** argv) {
   bool handles = true;
   bool merge = false;
   std::string merged_frame;
+  Eigen::Vector3d frame_offset = Eigen::Vector3d::Zero();
   long long mesh_vertices = 0;
   double voxel_map = 0;
   bool drive = false, zeros = false, sensor_given = false, formats_given = false;
@@ -259,6 +264,18 @@ int main(int argc, char** argv) {
       else if (a == "--quiet") quiet = true;
       else if (a == "--merge") merge = true;
       else if (a == "--frame") merged_frame = value();
+      else if (a == "--frame-offset") {
+        const std::string v = value();
+        std::stringstream vs(v);
+        std::string part;
+        int k = 0;
+        while (std::getline(vs, part, ',')) {
+          if (k >= 3) throw UsageError("--frame-offset needs X,Y,Z, got '" + v + "'");
+          frame_offset[k++] = toDouble(a, part);
+        }
+        if (k != 3 || !frame_offset.allFinite() || frame_offset.cwiseAbs().maxCoeff() > 1e4)
+          throw UsageError("--frame-offset needs X,Y,Z (finite, within 1e4 m), got '" + v + "'");
+      }
       else if (a == "--mesh-like") {
         mesh_vertices = toInt(a, value());
         if (mesh_vertices < 100 || mesh_vertices > 10000000) throw UsageError("--mesh-like must lie in [100, 1e7]");
@@ -334,6 +351,8 @@ int main(int argc, char** argv) {
     if (merge && merged_frame == "map" && fmt.count("bag") && bag.fixed_frame == "map")
       throw UsageError("--merge puts the cloud in frame map: give the bag another --fixed-frame (e.g. world)");
     if (drive && fmt.count("ply")) throw UsageError("--drive writes bag, json and pcd only");
+    if (!frame_offset.isZero() && (drive || zeros || fmt.count("bag")))
+      throw UsageError("--frame-offset is for pcd, ply and json of one scene (not --drive, --zeros or bag)");
 
     const auto t_start = std::chrono::steady_clock::now();
     sim::RoomSpec spec = scene_name == "random" ? sim::randomRoom(seed, random_options) : sim::paperRoom(scene_name);
@@ -413,6 +432,16 @@ int main(int argc, char** argv) {
       cloud = sim::meshLike(cloud, mesh);
     }
     if (voxel_map > 0) cloud = sim::voxelMap(cloud, voxel_map);
+    if (!frame_offset.isZero()) {
+      // The cloud's frame moved by -offset: its points (NaN stays NaN) and
+      // a sensor's VIEWPOINT by +offset, the frame's pose to match (the
+      // truth and the station files follow).
+      const Eigen::Vector3f o = frame_offset.cast<float>();
+      for (auto& q : cloud.cloud.points)
+        if (std::isfinite(q.x)) q.getVector3fMap() += o;
+      if (!merge) cloud.cloud.sensor_origin_.head<3>() += o;  // a registered export's stays 0 0 0
+      cloud.sensor_to_world = cloud.sensor_to_world * Eigen::Translation3d(-frame_offset);
+    }
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_start).count();
 
     if (fmt.count("pcd") && pcl::io::savePCDFileBinary(out + ".pcd", cloud.cloud) != 0)
