@@ -601,6 +601,21 @@ TEST(Sight, ACupboardsSideAtAJambIsNoLeaf) {
   }
 }
 
+TEST(Sight, AWardrobesSideIsNoLeafWhereItsFrontStandsBeforeTheDoorway) {
+  // Lidar64 drive 1077 (tuning range 1040-1079), in the room behind its
+  // open door: a wardrobe against the wall, its side read as a leaf at 89
+  // deg towards the sensor, hinged at the wall, the wall hidden behind the
+  // wardrobe read as its doorway: a false door tracked for 9 clouds.
+  // Before an open leaf's tip, on the side of the doorway it opens, a
+  // passage runs; there the wardrobe's front stands (state/leaf_internal.hpp,
+  // kTipFront).
+  const sim::DrivePlan plan = plannedDrive("lidar64", 1077);
+  for (std::size_t i : {216u, 222u, 228u, 234u, 240u}) {
+    const DriveCloud c = runDriveCloud(plan, i);
+    doorsAtTrueDoors(c, "drive 1077, cloud " + std::to_string(i));
+  }
+}
+
 // A leaf swung towards a station hides the wall beside its hinge. Seen
 // from a station inferred off the scanners' positions, rays pass there
 // through the wall's missing points, and that stretch looks like a doorway

@@ -490,10 +490,10 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
         char buf[512];
         std::snprintf(buf, sizeof buf,
                       "wall %zu: doorway s=[%.2f, %.2f] casing=%d face=%.2f through=%.2f front=%.2f recess=%.2f "
-                      "setback=%.2f top=%.2f thick=%.2f lowpast=%.2f | leaf found=%d band=%d angle=%.1f cov=%.2f rest=%.2f explains=%.2f "
+                      "setback=%.2f top=%.2f thick=%.2f lowpast=%.2f | leaf found=%d band=%d angle=%.1f cov=%.2f rest=%.2f tipfront=%.2f explains=%.2f "
                       "foot=%.2f/%.2f furnished=%.2f hinge_s0=%d toward=%d handle=%d | %s",
                       wi, d.s0, d.s1, d.casing, d.face, d.through, d.front, d.recess, d.set_back, d.top - floor_z,
-                      d.thickness, d.low_past_share, leaf.found, leaf.closed_in_band, leaf.angle_deg, leaf.coverage, leaf.rest_seen_through, leaf.occluders_explained,
+                      d.thickness, d.low_past_share, leaf.found, leaf.closed_in_band, leaf.angle_deg, leaf.coverage, leaf.rest_seen_through, leaf.front_at_tip, leaf.occluders_explained,
                       foot.seen, foot.blocked, furnished, leaf.hinge_at_s0, leaf.toward_viewer, leaf.handle_points,
                       !evidence ? "rejected: no casing, recess, see-through or own leaf hiding it"
                       : !free_foot ? "rejected: foot hidden by something right in front"

@@ -186,6 +186,16 @@ struct LeafSearch {
   // "leaves" had 0.40-0.99 of their rest seen through, true leaves at most 0.10.
   static constexpr double kRestFromShare = 0.65, kRestMargin = 0.1, kRestSeenThrough = 0.3;
   double restSeenThrough(double angle_deg, double len, double span) const;
+  // An open leaf stands clear of its doorway's passage: before its tip, on
+  // the side it opens to, the way through runs. A cupboard's or wardrobe's
+  // side taken for a leaf at about 90 deg, the wall hidden behind the
+  // cupboard taken for its doorway, has the cupboard's front there. A leaf
+  // between kTipFrontFromDeg and kTipFrontToDeg is no leaf where kTipFront
+  // or more of the cells of a strip 5-45 cm long from its tip, across that
+  // side, hold points (LeafFit::front_at_tip; lidar64 drives 1040 and 1077:
+  // 0.17-0.26 at the wardrobes).
+  static constexpr double kTipFront = 0.1, kTipFrontFromDeg = 60, kTipFrontToDeg = 120;
+  double frontAtTip(double angle_deg, double len) const;
   double s_h = 0, s_other = 0, e0 = 0, m = 0, d_h = 0;
   Eigen::Vector2d toXY(double s, double d) const;
 };

@@ -48,6 +48,26 @@ double LeafSearch::restSeenThrough(double angle_deg, double len, double span) co
   return static_cast<double>(crossed) / (static_cast<double>(last - first) * nz);
 }
 
+double LeafSearch::frontAtTip(double angle_deg, double len) const {
+  const double th = angle_deg * M_PI / 180;
+  const Eigen::Vector2d e(std::cos(th) * e0, std::sin(th) * m), k(std::sin(th) * e0, -std::cos(th) * m);
+  // The strip: within kAlong of the tip's distance from the hinge along the
+  // leaf, from kFrom to kTo past the leaf's opening face (+k), in kBin cells
+  // across by the search's height bins.
+  constexpr double kFrom = 0.05, kTo = 0.45, kBin = 0.05, kAlong = 0.06;
+  const int nb = static_cast<int>(std::lround((kTo - kFrom) / kBin));
+  std::vector<char> hit(static_cast<std::size_t>(nb) * nz, 0);
+  int cells = 0;
+  for (const Local& q : pts) {
+    const Eigen::Vector2d r(q.s - s_h, q.d - d_h);
+    const double a = r.dot(e), b = r.dot(k) - lt - tol;
+    if (a < len - kAlong || a > len + kAlong || b < kFrom || b >= kTo) continue;
+    char& f = hit[static_cast<std::size_t>(std::min(nb - 1, static_cast<int>((b - kFrom) / kBin))) * nz + q.zbin];
+    if (!f) f = 1, ++cells;
+  }
+  return static_cast<double>(cells) / (static_cast<double>(nb) * nz);
+}
+
 void LeafSearch::measureLeaf() {
   fit.best_angle_deg = best_deg;
   fit.best_coverage = gen_cov;
@@ -159,8 +179,10 @@ void LeafSearch::measureLeaf() {
     const bool in_volume = angle >= kCrowdFromDeg && fit.crowd_before >= kCrowdShare;
     const bool covered = cov >= min_cov || (sure_doorway && cov >= 0.5 * min_cov && gen_contra <= 0.05) || cut_by_view;
     fit.rest_seen_through = restSeenThrough(angle, len, std::abs(s_other - s_h));
+    fit.front_at_tip = frontAtTip(angle, len);
     const bool seen_past_tip = fit.rest_seen_through >= kRestSeenThrough;
-    if (covered && !in_volume && !seen_past_tip) {
+    const bool fronted = angle >= kTipFrontFromDeg && angle <= kTipFrontToDeg && fit.front_at_tip >= kTipFront;
+    if (covered && !in_volume && !seen_past_tip && !fronted) {
       fit.found = true;
       fit.coverage = cov;
       fit.angle_deg = angle;

@@ -57,6 +57,10 @@ struct LeafFit {
   // in part is hidden in the rest (by its jamb, furniture, the view's
   // edge); a cupboard's side at the jamb is seen past. 0 when not computed.
   double rest_seen_through = 0;
+  // An open leaf: the share of the cells of a strip from its tip across
+  // the side it opens to (5-45 cm) holding points: a passage runs there,
+  // a cupboard's front stands there when its side was taken for the leaf.
+  double front_at_tip = 0;
   // How densely the scan samples surfaces at the doorway: the share of the
   // 5 x 10 cm cells of the wall's face beside it (0.15-0.6 m beyond either
   // jamb, the better side) holding points, over kDenseWallCover, clamped to
