@@ -367,11 +367,11 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
         char buf[512];
         std::snprintf(buf, sizeof buf,
                       "wall %zu: doorway s=[%.2f, %.2f] casing=%d through=%.2f front=%.2f recess=%.2f top=%.2f "
-                      "thick=%.2f | no leaf (%s: %.0f deg, coverage %.2f, contradicted %.2f, crowded before %.2f, rest seen through %.2f; "
+                      "thick=%.2f | no leaf (%s: %.0f deg, coverage %.2f, contradicted %.2f, crowded before %.2f, rest seen through %.2f, front at tip %.2f; "
                       "%d points, %d rays; free from %.0f deg)%s",
                       wi, d.s0, d.s1, d.casing, d.through, d.front, d.recess, d.top - floor_z, d.thickness,
                       leaf.searched ? "best" : "not searched, no evidence and wall band",
-                      leaf.best_angle_deg, leaf.best_coverage, leaf.best_contradiction, leaf.crowd_before, leaf.rest_seen_through,
+                      leaf.best_angle_deg, leaf.best_coverage, leaf.best_contradiction, leaf.crowd_before, leaf.rest_seen_through, leaf.front_at_tip,
                       leaf.candidate_points, leaf.candidate_rays, leaf.free_from_deg, open_unseen     ? " | leaf unseen, reported at the bound"
                       : !room_for_leaf ? " | no room behind it for a leaf out of sight"
                       : bounded        ? " | seen past only above its lower body: no doorway to the floor"
