@@ -1471,8 +1471,11 @@ struct Survey {
 
 // `stations` scan positions in the room of randomRoom(seed), and with
 // beyond_doors one more beyond each door; rays_per_station each.
-Survey survey(std::uint64_t seed, int stations, std::size_t rays_per_station, bool beyond_doors = false) {
-  const sim::Scene scene = sim::buildScene(sim::randomRoom(seed));
+Survey survey(std::uint64_t seed, int stations, std::size_t rays_per_station, bool beyond_doors = false,
+              bool clutter = false) {
+  sim::RandomSceneOptions room;
+  room.clutter = clutter;
+  const sim::Scene scene = sim::buildScene(sim::randomRoom(seed, room));
   sim::TlsOptions o;
   o.seed = seed;
   o.viewpoints = stations;
@@ -1622,6 +1625,95 @@ TEST(Stations, ALeafSeenFromTheEdgeByOneStationIsMeasuredFromAnother) {
   EXPECT_TRUE(e.matches[0].angle_is_lower_bound);
   EXPECT_TRUE(e.matches[0].not_closed);
   EXPECT_EQ(e.bound_errors, 0);
+}
+
+TEST(Stations, BoundsOfALeafOutOfEveryStationsSightCombineSideBySide) {
+  // Room 1027 with clutter from three stations (the stations3 clutter
+  // sweep): door 1, open 108 deg behind its wall, is out of every station's
+  // sight. Each station's rays rule out some hinge and swing sides further
+  // than others; alone each bounds the door below 90 deg (by the side it
+  // sees least of), so it was NOT_CLOSED at the largest of those. A leaf
+  // out of every station's sight stands where none of their rays passes:
+  // side by side the bounds reach 90 deg or more, and the door is OPEN at a
+  // lower bound below its true angle.
+  const std::uint64_t seed = 1027;
+  const Survey sv = survey(seed, 3, 133333, false, true);
+  const Pipeline pipe{Parameters()};
+  ASSERT_EQ(sv.truth["doors"].size(), 2u);
+  const double truth_deg = sv.truth["doors"][1]["opening_angle_deg"];
+  for (std::size_t k = 0; k < sv.scans.size(); ++k) {
+    const Scored alone = sv.station(pipe, k);
+    SCOPED_TRACE(::testing::Message() << "seed=" << seed << " station " << k << ":" << describe(alone.result));
+    const eval::DoorMatch* m = matchOf(alone, 1);
+    if (m) {
+      EXPECT_TRUE(m->angle_is_lower_bound) << "the scene no longer shows what this test is about: a station sees the leaf";
+      EXPECT_LT(alone.result.doors.at(static_cast<std::size_t>(m->report_index)).opening_angle_deg, 90.0);
+    }
+  }
+  const PipelineResult all = pipe.runStations(sv.stations(), false);
+  const eval::EvalResult e = sv.score(all);
+  SCOPED_TRACE(::testing::Message() << "seed=" << seed << " survey:" << describe(all));
+  const eval::DoorMatch* m = matchOf(e, 1);
+  ASSERT_NE(m, nullptr);
+  const DoorResult& d = all.doors.at(static_cast<std::size_t>(m->report_index));
+  EXPECT_TRUE(d.angle_is_lower_bound);
+  EXPECT_EQ(d.state, DoorStateKind::Open);
+  EXPECT_GE(d.opening_angle_deg, 90.0);
+  EXPECT_LE(d.opening_angle_deg, truth_deg);
+  EXPECT_EQ(e.bound_errors, 0);
+}
+
+TEST(Stations, BoundsCombineSideBySideOnlyAtOneHinge) {
+  // combineBounds on reports made up here: two stations bound a door's four
+  // sides (hinge at either jamb, swung to either side); each side takes the
+  // larger of its two bounds, the door the least of those.
+  Parameters p;
+  auto report = [&](std::array<double, 4> deg, double shift) {
+    DoorResult d;
+    d.angle_is_lower_bound = true;
+    d.state = DoorStateKind::NotClosed;
+    d.width = 0.9;
+    d.hinge = Eigen::Vector3d(0, 0, 0);
+    d.opening_center = Eigen::Vector3d(0.45, 0, 0);
+    const Eigen::Vector3d x = Eigen::Vector3d::UnitX(), y = Eigen::Vector3d::UnitY();
+    int k = 0;
+    for (int h = 0; h < 2; ++h)
+      for (int sw = 0; sw < 2; ++sw, ++k)
+        d.side_bounds.push_back({Eigen::Vector3d(h == 0 ? shift : 0.9 + shift, sw == 0 ? 0.0 : -0.1, 0), (h == 0 ? 1.0 : -1.0) * x,
+                                 (sw == 0 ? 1.0 : -1.0) * y, deg[static_cast<std::size_t>(k)]});
+    d.opening_angle_deg = *std::min_element(deg.begin(), deg.end());
+    d.leaf_corners = {Eigen::Vector3d(0, 0, 0.01), Eigen::Vector3d(0.9, 0, 0.01), Eigen::Vector3d(0.9, 0, 2.0),
+                      Eigen::Vector3d(0, 0, 2.0)};
+    return d;
+  };
+  {
+    DoorResult a = report({180, 50, 170, 126}, 0);
+    const DoorResult b = report({180, 130, 96, 60}, 0.05);
+    combineBounds(a, {&b}, p);
+    EXPECT_DOUBLE_EQ(a.opening_angle_deg, 126);  // sides: 180, 130, 170, 126
+    EXPECT_EQ(a.state, DoorStateKind::Open);
+    EXPECT_TRUE(a.angle_is_lower_bound);
+    EXPECT_NEAR(a.hinge.x(), 0.9, 1e-9);
+    EXPECT_NEAR(a.hinge.y(), -0.1, 1e-9);
+    EXPECT_NEAR((a.leaf_corners[1] - a.leaf_corners[0]).norm(), 0.9, 1e-9);
+    EXPECT_GT(a.clear_width, 0.8);
+  }
+  {
+    // The other station's jambs 0.4 m off: another doorway's sides, not combined.
+    DoorResult a = report({180, 50, 170, 126}, 0);
+    const DoorResult b = report({180, 130, 96, 60}, 0.4);
+    combineBounds(a, {&b}, p);
+    EXPECT_DOUBLE_EQ(a.opening_angle_deg, 50);
+    EXPECT_EQ(a.state, DoorStateKind::NotClosed);
+  }
+  {
+    // A measured leaf is no bound: nothing combines.
+    DoorResult a = report({180, 50, 170, 126}, 0);
+    DoorResult b = report({180, 130, 96, 60}, 0);
+    b.angle_is_lower_bound = false;
+    combineBounds(a, {&b}, p);
+    EXPECT_DOUBLE_EQ(a.opening_angle_deg, 50);
+  }
 }
 
 TEST(Stations, AStationBeyondEachDoorMeasuresTheLeavesSwungOutOfTheRoom) {

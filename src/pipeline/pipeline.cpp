@@ -93,6 +93,37 @@ DoorStateKind stateOfBound(double bound_deg, const Parameters& p) {
   return bound_deg >= p.open_from_deg ? DoorStateKind::Open : DoorStateKind::NotClosed;
 }
 
+void combineBounds(DoorResult& d, const std::vector<const DoorResult*>& others, const Parameters& p) {
+  constexpr double kSameHinge = 0.3, kSameSwingCos = 0.7;  // m; cos 45 deg
+  if (!d.angle_is_lower_bound || d.side_bounds.empty()) return;
+  const DoorResult::SideBound* least = nullptr;
+  double least_deg = 181;
+  for (const DoorResult::SideBound& side : d.side_bounds) {
+    double deg = side.bound_deg;
+    for (const DoorResult* o : others) {
+      if (!o->angle_is_lower_bound) continue;
+      for (const DoorResult::SideBound& os : o->side_bounds)
+        if ((os.hinge - side.hinge).norm() < kSameHinge && os.swing.dot(side.swing) > kSameSwingCos)
+          deg = std::max(deg, os.bound_deg);
+    }
+    if (deg < least_deg) least_deg = deg, least = &side;
+  }
+  if (!least || !(least_deg > d.opening_angle_deg) || least_deg > 170) return;
+  const double th = least_deg * M_PI / 180;
+  const Eigen::Vector3d dir = (std::cos(th) * least->along + std::sin(th) * least->swing).normalized();
+  const double length = (d.leaf_corners[1] - d.leaf_corners[0]).norm();
+  const Eigen::Vector3d up_bottom = d.leaf_corners[0] - d.hinge, up_top = d.leaf_corners[3] - d.hinge;
+  d.opening_angle_deg = least_deg;
+  d.state = stateOfBound(least_deg, p);
+  d.hinge = least->hinge;
+  d.wall_normal = least->swing;
+  d.leaf_corners = {d.hinge + up_bottom, d.hinge + up_bottom + length * dir, d.hinge + up_top + length * dir,
+                    d.hinge + up_top};
+  d.leaf_line_point = d.hinge;
+  d.leaf_line_direction = dir;
+  d.clear_width = clearWidth(d.width, least_deg, p.leaf_thickness, p.closed_below_deg);
+}
+
 const char* toString(Swing s) {
   switch (s) {
     case Swing::TowardViewer: return "toward_viewer";

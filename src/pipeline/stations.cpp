@@ -255,6 +255,15 @@ PipelineResult Pipeline::runStations(const std::vector<Station>& stations, bool 
         if (stations[report_station[i]].refine_only && !reports[i].angle_is_lower_bound && surerReport(reports[i], *best))
           best = &reports[i];
     res.doors.push_back(*best);
+    // A leaf no main station saw: their bounds combine side by side where
+    // their rays were observed (stations given, not inferred).
+    std::vector<const DoorResult*> others;
+    for (std::size_t i : g) {
+      const Station& st = stations[report_station[i]];
+      if (&reports[i] != best && !st.refine_only && !st.inferred) others.push_back(&reports[i]);
+    }
+    const std::size_t best_station = static_cast<std::size_t>(report_station[static_cast<std::size_t>(best - reports.data())]);
+    if (!others.empty() && !stations[best_station].inferred) combineBounds(res.doors.back(), others, each);
   }
   res.doors.erase(std::remove_if(res.doors.begin(), res.doors.end(),
                                  [&](const DoorResult& d) {
@@ -336,7 +345,7 @@ PipelineResult Pipeline::runWithoutViewpoint(const pcl::PointCloud<pcl::PointXYZ
   } else {
     std::vector<Station> stations;
     for (std::size_t k = 0; k < inferred.viewpoints.size(); ++k)
-      stations.push_back({&inferred.clouds[k], inferred.viewpoints[k], k >= inferred.main});
+      stations.push_back({&inferred.clouds[k], inferred.viewpoints[k], k >= inferred.main, true});
     res = runStations(stations, with_reconstruction);
     res.viewpoint.reset();
     res.stations = inferred.viewpoints;

@@ -368,11 +368,12 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
         std::snprintf(buf, sizeof buf,
                       "wall %zu: doorway s=[%.2f, %.2f] casing=%d through=%.2f front=%.2f recess=%.2f top=%.2f "
                       "thick=%.2f | no leaf (%s: %.0f deg, coverage %.2f, contradicted %.2f, crowded before %.2f, rest seen through %.2f, front at tip %.2f; "
-                      "%d points, %d rays; free from %.0f deg)%s",
+                      "%d points, %d rays; free from %.0f deg, by side %.0f/%.0f/%.0f/%.0f)%s",
                       wi, d.s0, d.s1, d.casing, d.through, d.front, d.recess, d.top - floor_z, d.thickness,
                       leaf.searched ? "best" : "not searched, no evidence and wall band",
                       leaf.best_angle_deg, leaf.best_coverage, leaf.best_contradiction, leaf.crowd_before, leaf.rest_seen_through, leaf.front_at_tip,
-                      leaf.candidate_points, leaf.candidate_rays, leaf.free_from_deg, open_unseen     ? " | leaf unseen, reported at the bound"
+                      leaf.candidate_points, leaf.candidate_rays, leaf.free_from_deg, leaf.free_from_each[0],
+                      leaf.free_from_each[1], leaf.free_from_each[2], leaf.free_from_each[3], open_unseen     ? " | leaf unseen, reported at the bound"
                       : !room_for_leaf ? " | no room behind it for a leaf out of sight"
                       : bounded        ? " | seen past only above its lower body: no doorway to the floor"
                                        : "");
@@ -536,6 +537,15 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       door.leaf_line_direction = toInput(Eigen::Vector3d(leaf.direction.x(), leaf.direction.y(), 0));
       door.casing = d.casing;
       door.head_seen = std::isfinite(d.top);
+      if (open_unseen)
+        for (int h = 0; h < 2; ++h)
+          for (int sw = 0; sw < 2; ++sw) {
+            const Eigen::Vector2d hinge2 =
+                wall.point + (h == 0 ? d.s0 : d.s1) * wall.direction + (sw == 0 ? 0.0 : -t) * wall.normal;
+            const Eigen::Vector2d along2 = (h == 0 ? 1.0 : -1.0) * wall.direction, swing2 = (sw == 0 ? 1.0 : -1.0) * wall.normal;
+            door.side_bounds.push_back({toInput(onFloor(hinge2)), toInput(Eigen::Vector3d(along2.x(), along2.y(), 0)),
+                                        toInput(Eigen::Vector3d(swing2.x(), swing2.y(), 0)), leaf.free_from_each[h * 2 + sw]});
+          }
       // The same doorway found from two overlapping wall hypotheses, or the
       // same leaf claimed by two doorways (a leaf's shadow beside its own
       // doorway looks like one): keep the surer one (surerReport, as

@@ -84,13 +84,17 @@ void LeafSearch::freeSpaceBound() {
     // bound is that of a leaf spanning the doorway seen, so only at its
     // jambs, not at the hinges moved off them): a leaf hinged deeper in its
     // doorway than the hypothesis would rule it out wrongly.
+    // Each hinge and swing side on its own (free_from_each: several
+    // stations' bounds combine per side, runStations), the least of them
+    // the bound (the first side reaching it says where).
     for (int h = 0; h < 2; ++h)
-      for (int sw = 0; sw < 2; ++sw)
+      for (int sw = 0; sw < 2; ++sw) {
+        double side = 180;
         for (double rec : recess_steps) {
           if (rec > 0 && rec + lt > (sw == 0 ? t_toward : t)) continue;
           const double sh = h == 0 ? door.s0 : door.s1, ee = h == 0 ? 1.0 : -1.0, mm = sw == 0 ? 1.0 : -1.0;
           const Eigen::Vector2d H(sh, sw == 0 ? -rec : -t + rec);
-          for (int deg = 0; deg < bound && deg <= 170; deg += 2) {
+          for (int deg = 0; deg < side && deg <= 170; deg += 2) {
             const double th = deg * M_PI / 180;
             const Eigen::Vector2d e(std::cos(th) * ee, std::sin(th) * mm), k(std::sin(th) * ee, -std::cos(th) * mm);
             const Eigen::Vector2d P = H + k * (lt / 2);
@@ -114,15 +118,18 @@ void LeafSearch::freeSpaceBound() {
               if (!f) f = 1, ++n;
             }
             if (n <= 0.03 * nl * nz) {
-              if (deg < bound) {
-                bound = deg;
-                fit.hinge_at_s0 = h == 0;
-                fit.toward_viewer = sw == 0;
-              }
+              side = deg;
               break;
             }
           }
         }
+        fit.free_from_each[h * 2 + sw] = side;
+        if (side < bound) {
+          bound = side;
+          fit.hinge_at_s0 = h == 0;
+          fit.toward_viewer = sw == 0;
+        }
+      }
     fit.free_from_deg = bound;
   }
 }

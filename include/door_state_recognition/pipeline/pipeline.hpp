@@ -53,14 +53,15 @@ struct DoorResult {
   // Open from it (stateOfBound).
   bool angle_is_lower_bound = false;
   double confidence = 0;
-  Eigen::Vector3d hinge, opening_center;
-  Eigen::Vector3d wall_normal;  // horizontal unit, towards the side the leaf swings to
+  Eigen::Vector3d hinge = Eigen::Vector3d::Zero(), opening_center = Eigen::Vector3d::Zero();
+  Eigen::Vector3d wall_normal = Eigen::Vector3d::Zero();  // horizontal unit, towards the side the leaf swings to
   double width = 0, height = 0;
   // The free passage through the doorway as observed, metres (clearWidth):
   // the doorway's width less what the leaf takes at its angle; for a bound
   // (angle_is_lower_bound) what a leaf at the bound leaves, so at least this.
   double clear_width = 0;
-  std::array<Eigen::Vector3d, 4> leaf_corners;  // hinge-bottom, latch-bottom, latch-top, hinge-top
+  std::array<Eigen::Vector3d, 4> leaf_corners{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
+                                              Eigen::Vector3d::Zero()};  // hinge-bottom, latch-bottom, latch-top, hinge-top
   Swing swing = Swing::Unknown;
   // Trim (casing) was seen around the doorway: its legs stand out of the
   // wall's face at both jambs. What tells the door's own doorway from the
@@ -71,8 +72,28 @@ struct DoorResult {
   // one leaf (leavesOverlap).
   bool head_seen = false;
   // Fitted lines on the floor plane (the paper's 3.3.2), for display.
-  Eigen::Vector3d wall_line_point, wall_line_direction, leaf_line_point, leaf_line_direction;
+  Eigen::Vector3d wall_line_point = Eigen::Vector3d::Zero(), wall_line_direction = Eigen::Vector3d::Zero(),
+                  leaf_line_point = Eigen::Vector3d::Zero(), leaf_line_direction = Eigen::Vector3d::Zero();
+  // A bound (angle_is_lower_bound): the least angle free space leaves a
+  // leaf hinged at each jamb and swung to each side (four, in the input
+  // frame; the bound is the least). Several stations' bounds of one door
+  // combine side by side (combineBounds).
+  struct SideBound {
+    Eigen::Vector3d hinge;  // foot of the hinge on the floor
+    Eigen::Vector3d along;  // horizontal unit, from the hinge to the latch jamb
+    Eigen::Vector3d swing;  // horizontal unit, the side the leaf swings to
+    double bound_deg = 180;
+  };
+  std::vector<SideBound> side_bounds;
 };
+
+// Bounds of one door from several stations (`others`: the other stations'
+// reports of it, bounds too): a leaf out of sight of every station stands
+// where none of their rays passes, so each hinge and swing side takes the
+// largest of its bounds (sides the same within 0.3 m at the hinge); the
+// door's bound is the least over its sides, `d` rebuilt at it where that
+// is larger than its own (a bound past 170 deg is left: no side left free).
+void combineBounds(DoorResult& d, const std::vector<const DoorResult*>& others, const Parameters& p);
 
 // The free passage width (m) a leaf leaves in its doorway, seen along the
 // doorway's normal (what passes straight through): a leaf of length `width`
@@ -151,6 +172,11 @@ struct Station {
   // Its doors only refine doors other stations found (a station inferred
   // from few points of its own: runWithoutViewpoint), never add one.
   bool refine_only = false;
+  // Inferred from the cloud's surfaces (runWithoutViewpoint), not given:
+  // its rays are a guess (no scanner stood there; a ray to a point another
+  // scanner saw may cross what none saw), so its bounds combine with other
+  // stations' only door by door, never side by side (combineBounds).
+  bool inferred = false;
 };
 
 class Pipeline {

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <limits>
 #include <vector>
 
@@ -76,6 +77,11 @@ struct LeafFit {
   // (hinge_at_s0 and toward_viewer say where); a lower bound of the opening
   // angle. NaN when not computed.
   double free_from_deg = std::numeric_limits<double>::quiet_NaN();
+  // The same for each hinge and swing side (index 2 * (hinge at s1) +
+  // (swings away from the viewer)): 180 where a leaf there blocks some ray
+  // at every angle; free_from_deg is the least of them.
+  std::array<double, 4> free_from_each{std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN(),
+                                       std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};
   bool searched = true;  // false: skipped, no closed leaf could have made it a door (see fitLeaf)
   std::vector<int> inliers;
 };
