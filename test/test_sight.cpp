@@ -616,38 +616,6 @@ TEST(Sight, AWardrobesSideIsNoLeafWhereItsFrontStandsBeforeTheDoorway) {
   }
 }
 
-TEST(Sight, ATrimLegFramesTheDoorwayWhoseOtherLegIsLikeIt) {
-  // Lidar64 drives 1077 and 1017 (tuning range), beside a closed door with
-  // trim: the wall's face standing barely out of a plane drawn behind it by
-  // the leaf set back in the doorway (1077), or a run of noise (1017), was
-  // paired with the door's leg on that side, left to right, before the
-  // door's other leg could be: a closed door of plain wall beside the true
-  // one, tracked for 10 and 2 clouds. One door's trim is one moulding: the
-  // leg goes to the doorway whose other leg stands out of the wall like it
-  // (recognition/doorway_trim.cpp), and the true door is found instead.
-  struct Case {
-    const char* name;
-    std::uint64_t seed;
-    std::size_t cloud;
-    int closed_door;  // the true closed door's index in the scene
-  };
-  for (const Case& k : {Case{"1077", 1077, 144, 2}, Case{"1077", 1077, 132, 2}, Case{"1017", 1017, 138, 0}}) {
-    const sim::DrivePlan plan = plannedDrive("lidar64", k.seed);
-    const DriveCloud c = runDriveCloud(plan, k.cloud);
-    const std::string where = std::string("drive ") + k.name + ", cloud " + std::to_string(k.cloud);
-    doorsAtTrueDoors(c, where);
-    ASSERT_LT(static_cast<std::size_t>(k.closed_door), c.scene.doors.size());
-    ASSERT_LT(c.scene.doors[static_cast<std::size_t>(k.closed_door)].angle_deg, 1.0)
-        << where << ": the scene no longer shows what this test is about";
-    if (k.cloud == 132) continue;  // there the door's own trim is not paired: no door, and none beside it
-    bool found = false;
-    for (const DoorResult& d : c.result.doors)
-      found |= (d.opening_center - c.scene.doors[static_cast<std::size_t>(k.closed_door)].opening_center).head<2>().norm() < 0.3 &&
-               d.state == DoorStateKind::Closed;
-    EXPECT_TRUE(found) << where << ": the closed door not found" << doors(c.result);
-  }
-}
-
 // A leaf swung towards a station hides the wall beside its hinge. Seen
 // from a station inferred off the scanners' positions, rays pass there
 // through the wall's missing points, and that stretch looks like a doorway

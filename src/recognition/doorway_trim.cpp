@@ -37,6 +37,9 @@ constexpr double kOpenThrough = 0.6;
 // side holding kSideMinPoints face points or more.
 constexpr int kSideFrom = 4, kSideTo = 7, kSideMinPoints = 20;
 constexpr double kLegOverSide = 0.5;
+// The lesser of two legs paired across a doorway stands out at least this
+// share of the greater.
+constexpr double kLegsAlike = 0.3;
 // How alike two legs are taken where one of them is not judged (neither
 // of its sides seen): below a pair of one moulding, above a failed one.
 constexpr double kUnjudgedAlike = 0.5;
@@ -215,22 +218,22 @@ void DoorwaySearch::findTrimLegs() {
     const int head = headState(a, b);
     const bool strong_legs = legs[i].second > legs[i].first && legs[i + 1].second > legs[i + 1].first;
     // One door's trim is one moulding on both sides: its legs stand out of
-    // the face beside them alike (where both are judged; a leg broken by
-    // noise, or seen at a grazing angle, stands out less: no bar, a rank).
+    // the face beside them alike (where both are judged). The wall's face
+    // standing barely out of a plane drawn behind it by a set-back leaf
+    // pairs with a true leg no more (lidar64 drive 1077, cloud 144: 6 mm
+    // beside 61 mm, the door's own legs 61 and 47 mm).
     int na = 0, nb = 0;
     const double sa = standOf(legs[i], na), sb = standOf(legs[i + 1], nb);
     const double alike = std::isfinite(sa) && std::isfinite(sb) && std::max(sa, sb) > 0
                              ? std::min(sa, sb) / std::max(sa, sb)
                              : kUnjudgedAlike;
-    if (b - a >= p.door_min_width - 0.1 && b - a <= p.door_max_width + 0.1 && (head == 1 || (head == -1 && strong_legs)))
+    if (b - a >= p.door_min_width - 0.1 && b - a <= p.door_max_width + 0.1 && alike >= kLegsAlike &&
+        (head == 1 || (head == -1 && strong_legs)))
       pairs.push_back({i, alike});
   }
   // A leg frames one doorway: where two pairs share one, the more alike
-  // takes it. The wall's face standing barely out of a plane drawn behind
-  // it by a set-back leaf (6 mm beside a door's leg of 61 mm, its other
-  // leg 47 mm: lidar64 drive 1077, cloud 144), or a noise run (15 mm
-  // beside 36 mm, the other leg 38 mm: drive 1017), took the door's leg
-  // from left to right and made a closed door of plain wall beside it.
+  // takes it (a noise run beside a door's leg, 15 mm beside its 36 mm,
+  // lost the leg to the door's other leg, 38 mm: lidar64 drive 1017).
   std::stable_sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) { return x.alike > y.alike; });
   std::vector<char> used(legs.size(), 0);
   std::vector<std::size_t> chosen;
