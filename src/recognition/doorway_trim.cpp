@@ -32,17 +32,6 @@ constexpr int kHeadMeanMinPoints = 60;
 // doorway, is no opening (rgbd-structured-robot 1026: a closed door beside
 // it). Sought within kOpenBeyondColumns (4 cm each) beyond a trim leg.
 constexpr double kOpenThrough = 0.6;
-// A trim leg of (1) stands out of the face kSideFrom-kSideTo sub-columns
-// (2 cm each) off on one side by kLegOverSide of casing_min_offset, that
-// side holding kSideMinPoints face points or more.
-constexpr int kSideFrom = 4, kSideTo = 7, kSideMinPoints = 20;
-constexpr double kLegOverSide = 0.5;
-// The lesser of two legs paired across a doorway stands out at least this
-// share of the greater.
-constexpr double kLegsAlike = 0.3;
-// How alike two legs are taken where one of them is not judged (neither
-// of its sides seen): below a pair of one moulding, above a failed one.
-constexpr double kUnjudgedAlike = 0.5;
 constexpr int kOpenMinCells = 4, kOpenBeyondColumns = 2;
 
 void DoorwaySearch::findTrimLegs() {
@@ -80,40 +69,6 @@ void DoorwaySearch::findTrimLegs() {
     if (w <= 0.13) legs.push_back({c, e});
     c = e + 1;
   }
-  // Trim stands out of the wall's face beside it, on one side at least
-  // (the wall on its outer side, or a leaf set back on its inner side).
-  // Out of the fitted plane alone is not enough: a closed leaf set back
-  // in a doorway draws the plane behind the face around it, and the face
-  // then stands out of it over metres, broken by noise into hand-wide runs
-  // (lidar64 drive 1077: such a run paired with the leg of a closed door
-  // beside it made a second closed door of plain wall, in ten clouds).
-  // Judged by the mean offset of the face points kSideFrom-kSideTo
-  // sub-columns off, pooled (a rotating LiDAR leaves a few points a
-  // sub-column), where kSideMinPoints or more are seen on a side.
-  auto pooled = [&](int a, int b, int& n) {
-    double sum = 0;
-    n = 0;
-    for (int k = std::max(0, a); k <= std::min(sub - 1, b); ++k) sum += face_d_sum[k], n += face_d_n[k];
-    return n > 0 ? sum / n : 0.0;
-  };
-  // How far a leg stands out of the face beside it (NaN: neither side seen).
-  auto standOf = [&](const std::pair<int, int>& g, int& n) {
-    int nl = 0, nr = 0;
-    const double leg = pooled(g.first, g.second, n);
-    const double l = pooled(g.first - kSideTo, g.first - kSideFrom, nl);
-    const double r = pooled(g.second + kSideFrom, g.second + kSideTo, nr);
-    const bool seen_l = nl >= kSideMinPoints, seen_r = nr >= kSideMinPoints;
-    if (!seen_l && !seen_r) return std::numeric_limits<double>::quiet_NaN();
-    return leg - (seen_l && seen_r ? std::min(l, r) : seen_l ? l : r);
-  };
-  legs.erase(std::remove_if(legs.begin(), legs.end(),
-                            [&](const std::pair<int, int>& g) {
-                              int n = 0;
-                              const double stand = standOf(g, n);
-                              return std::isfinite(stand) &&
-                                     !(stand >= kLegOverSide * p.casing_min_offset && significant(g.first, stand, n));
-                            }),
-             legs.end());
   // Trim seen against its neighbours: a depth camera's noise spreads the
   // wall's face over centimetres, and a leaf filling much of a small view
   // tilts or shifts the fitted plane by about the trim's depth, so "out of
@@ -204,46 +159,17 @@ void DoorwaySearch::findTrimLegs() {
       far = subS(legs[i - 1].second + 1);
     return headState(std::min(edge, far), std::max(edge, far)) != 0;
   };
-  // Neighbouring legs that can frame a doorway, each with how alike they
-  // stand out (1: the same; kUnjudgedAlike where one is not judged).
-  struct Pair {
-    std::size_t i;
-    double alike;
-  };
-  std::vector<Pair> pairs;
   for (std::size_t i = 0; i + 1 < legs.size(); ++i) {
     const double a = subS(legs[i].second + 1), b = subS(legs[i + 1].first);
     if (openBeyond(i, false) || openBeyond(i + 1, true)) continue;
     // Without a view of the head, both legs must be clearly trim: two sub-columns wide.
     const int head = headState(a, b);
     const bool strong_legs = legs[i].second > legs[i].first && legs[i + 1].second > legs[i + 1].first;
-    // One door's trim is one moulding on both sides: its legs stand out of
-    // the face beside them alike (where both are judged). The wall's face
-    // standing barely out of a plane drawn behind it by a set-back leaf
-    // pairs with a true leg no more (lidar64 drive 1077, cloud 144: 6 mm
-    // beside 61 mm, the door's own legs 61 and 47 mm).
-    int na = 0, nb = 0;
-    const double sa = standOf(legs[i], na), sb = standOf(legs[i + 1], nb);
-    const double alike = std::isfinite(sa) && std::isfinite(sb) && std::max(sa, sb) > 0
-                             ? std::min(sa, sb) / std::max(sa, sb)
-                             : kUnjudgedAlike;
-    if (b - a >= p.door_min_width - 0.1 && b - a <= p.door_max_width + 0.1 && alike >= kLegsAlike &&
-        (head == 1 || (head == -1 && strong_legs)))
-      pairs.push_back({i, alike});
+    if (b - a >= p.door_min_width - 0.1 && b - a <= p.door_max_width + 0.1 && (head == 1 || (head == -1 && strong_legs))) {
+      addCandidate(a, b, true);
+      ++i;
+    }
   }
-  // A leg frames one doorway: where two pairs share one, the more alike
-  // takes it (a noise run beside a door's leg, 15 mm beside its 36 mm,
-  // lost the leg to the door's other leg, 38 mm: lidar64 drive 1017).
-  std::stable_sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) { return x.alike > y.alike; });
-  std::vector<char> used(legs.size(), 0);
-  std::vector<std::size_t> chosen;
-  for (const Pair& q : pairs) {
-    if (used[q.i] || used[q.i + 1]) continue;
-    used[q.i] = used[q.i + 1] = 1;
-    chosen.push_back(q.i);
-  }
-  std::sort(chosen.begin(), chosen.end());  // along the wall, as found
-  for (std::size_t i : chosen) addCandidate(subS(legs[i].second + 1), subS(legs[i + 1].first), true);
 }
 
 // A mean offset of n face points stands out of the wall's noise when it
