@@ -96,7 +96,8 @@ void LeafSearch::freeSpaceBound() {
           const Eigen::Vector2d H(sh, sw == 0 ? -rec : -t + rec);
           for (int deg = 0; deg < side && deg <= 170; deg += 2) {
             const double th = deg * M_PI / 180;
-            const Eigen::Vector2d e(std::cos(th) * ee, std::sin(th) * mm), k(std::sin(th) * ee, -std::cos(th) * mm);
+            const LeafAxes axes(th, ee, mm);
+            const Eigen::Vector2d &e = axes.e, &k = axes.k;
             const Eigen::Vector2d P = H + k * (lt / 2);
             std::fill(crossed.begin(), crossed.end(), 0);
             // Cells whose centre the range image shows free first (cheap),

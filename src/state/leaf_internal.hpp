@@ -30,6 +30,16 @@ void forEachTask(std::size_t n, const F& f) {
   error.rethrow();
 }
 
+// A leaf's axes in wall coordinates (s along, d towards the viewer), swung
+// by th (rad) from closed, its latch towards e0 (+1: +s) and opening to the
+// side m (+1: the viewer's): e from the hinge to the latch, k square to it,
+// away from the side the leaf opens to.
+struct LeafAxes {
+  Eigen::Vector2d e, k;
+  LeafAxes(double th, double e0, double m)
+      : e(std::cos(th) * e0, std::sin(th) * m), k(std::sin(th) * e0, -std::cos(th) * m) {}
+};
+
 // Where a sensor ray from v (height vz) along r (rising dz over its length)
 // crosses the line P + a e of a leaf's mid-plane: a along the leaf and the
 // height z; false when it does not, or only past lam_max of its length.

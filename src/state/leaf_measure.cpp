@@ -19,7 +19,8 @@ Eigen::Vector2d LeafSearch::toXY(double s, double d) const { return wall.point +
 
 double LeafSearch::crowdBefore(double angle_deg, double len) const {
   const double th = angle_deg * M_PI / 180;
-  const Eigen::Vector2d e(std::cos(th) * e0, std::sin(th) * m), k(std::sin(th) * e0, -std::cos(th) * m);
+  const LeafAxes axes(th, e0, m);
+  const Eigen::Vector2d &e = axes.e, &k = axes.k;
   // The sensor's side of the leaf's plane; "out" measures past the band on that side.
   const double side = (vsd - Eigen::Vector2d(s_h, d_h)).dot(k) >= 0 ? 1.0 : -1.0;
   int in_band = 0, before = 0;
@@ -50,7 +51,8 @@ double LeafSearch::restSeenThrough(double angle_deg, double len, double span) co
 
 double LeafSearch::frontAtTip(double angle_deg, double len) const {
   const double th = angle_deg * M_PI / 180;
-  const Eigen::Vector2d e(std::cos(th) * e0, std::sin(th) * m), k(std::sin(th) * e0, -std::cos(th) * m);
+  const LeafAxes axes(th, e0, m);
+  const Eigen::Vector2d &e = axes.e, &k = axes.k;
   // The strip: within kAlong of the tip's distance from the hinge along the
   // leaf, from kFrom to kTo past the leaf's opening face (+k), in kBin cells
   // across by the search's height bins.
@@ -84,7 +86,8 @@ void LeafSearch::measureLeaf() {
   auto support = [&](double sh, double th_deg, double len, double band_lo, double band_hi, std::vector<int>* inl,
                      std::vector<Eigen::Vector2d>* xy) {
     const double th = th_deg * M_PI / 180;
-    const Eigen::Vector2d e(std::cos(th) * e0, std::sin(th) * m), k(std::sin(th) * e0, -std::cos(th) * m);
+    const LeafAxes axes(th, e0, m);
+    const Eigen::Vector2d &e = axes.e, &k = axes.k;
     const int nl = std::max(1, static_cast<int>(std::ceil(len / abin)));
     std::vector<char> hit(static_cast<std::size_t>(nl) * nz, 0);
     int cells = 0;
@@ -124,7 +127,7 @@ void LeafSearch::measureLeaf() {
       if (xy.size() < 10) break;
       Line2 l = fitLine(xy);
       const double th = angle * M_PI / 180;
-      const Eigen::Vector2d e(std::cos(th) * e0, std::sin(th) * m);
+      const Eigen::Vector2d e = LeafAxes(th, e0, m).e;
       if (l.direction.dot(e) < 0) l.direction = -l.direction;
       const double refined = std::atan2(l.direction.y() * m, l.direction.x() * e0) * 180 / M_PI;
       if (std::abs(refined - angle) > 8) break;  // the fit wandered off: keep the search's answer
@@ -159,7 +162,8 @@ void LeafSearch::measureLeaf() {
     double in_view = 1.0;
     if (view) {
       const double th = angle * M_PI / 180;
-      const Eigen::Vector2d e(std::cos(th) * e0, std::sin(th) * m), k(std::sin(th) * e0, -std::cos(th) * m);
+      const LeafAxes axes(th, e0, m);
+      const Eigen::Vector2d &e = axes.e, &k = axes.k;
       const int nl = std::max(1, static_cast<int>(std::ceil(len / abin)));
       int inside = 0;
       for (int i = 0; i < nl; ++i) {
@@ -211,7 +215,8 @@ void LeafSearch::placeLeaf() {
     // On the leaf: within its thickness either side of the hinge line (the
     // face seen may be either, and a recess the search missed shifts it).
     const double th = fit.angle_deg * M_PI / 180;
-    const Eigen::Vector2d e(std::cos(th) * e0, std::sin(th) * m), k(std::sin(th) * e0, -std::cos(th) * m);
+    const LeafAxes axes(th, e0, m);
+    const Eigen::Vector2d &e = axes.e, &k = axes.k;
     int occluders = 0, explained = 0;
     for (const Local& q : pts) {
       if (q.d <= p.face_tolerance + 0.02 || q.d >= vsd.y()) continue;
@@ -226,7 +231,7 @@ void LeafSearch::placeLeaf() {
     fit.occluders_explained = occluders > 0 ? static_cast<double>(explained) / occluders : 0.0;
   }
   const double th = fit.angle_deg * M_PI / 180;
-  const Eigen::Vector2d dir_sd(std::cos(th) * e0, std::sin(th) * m);
+  const Eigen::Vector2d dir_sd = LeafAxes(th, e0, m).e;
   const double hinge_d = !fit.closed_in_band ? d_h : fit.toward_viewer ? fit.face_d : fit.face_d - lt;
   const Eigen::Vector2d hinge_xy = toXY(s_h, hinge_d);
   fit.hinge = hinge_xy;

@@ -71,8 +71,9 @@ void LeafSearch::axes(const HingeRun& w, std::vector<Eigen::Vector2d>& E, std::v
   const Eigen::Vector2d H(w.s_h, w.d_h);
   for (int ai = 0; ai < w.count; ++ai) {
     const double th = (w.start + ai * w.step) * M_PI / 180;
-    E[ai] = Eigen::Vector2d(std::cos(th) * w.e0, std::sin(th) * w.m);
-    K[ai] = Eigen::Vector2d(std::sin(th) * w.e0, -std::cos(th) * w.m);
+    const LeafAxes axes(th, w.e0, w.m);
+    E[ai] = axes.e;
+    K[ai] = axes.k;
     P[ai] = H + K[ai] * (lt / 2);  // the leaf's mid-plane
   }
 }
