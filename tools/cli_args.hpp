@@ -33,6 +33,20 @@ inline double toDouble(const std::string& flag, const std::string& v) {
   return x;
 }
 
+// Three comma-separated numbers X,Y,Z (each as toDouble); `what` names them
+// in the error ("X,Y,Z (three numbers)").
+inline void toXYZ(const std::string& flag, const std::string& v, const std::string& what, double out[3]) {
+  int k = 0;
+  std::size_t from = 0;
+  for (std::size_t comma;; from = comma + 1) {
+    comma = v.find(',', from);
+    if (k == 3) throw UsageError(flag + " needs " + what + ", got '" + v + "'");
+    out[k++] = toDouble(flag, v.substr(from, comma == std::string::npos ? std::string::npos : comma - from));
+    if (comma == std::string::npos) break;
+  }
+  if (k != 3) throw UsageError(flag + " needs " + what + ", got '" + v + "'");
+}
+
 inline long long toInt(const std::string& flag, const std::string& v) {
   std::size_t n = 0;
   long long x = 0;

@@ -266,14 +266,10 @@ int main(int argc, char** argv) {
       else if (a == "--frame") merged_frame = value();
       else if (a == "--frame-offset") {
         const std::string v = value();
-        std::stringstream vs(v);
-        std::string part;
-        int k = 0;
-        while (std::getline(vs, part, ',')) {
-          if (k >= 3) throw UsageError("--frame-offset needs X,Y,Z, got '" + v + "'");
-          frame_offset[k++] = toDouble(a, part);
-        }
-        if (k != 3 || !frame_offset.allFinite() || frame_offset.cwiseAbs().maxCoeff() > 1e4)
+        double xyz[3];
+        dsr::tools::toXYZ(a, v, "X,Y,Z", xyz);
+        frame_offset = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
+        if (frame_offset.cwiseAbs().maxCoeff() > 1e4)
           throw UsageError("--frame-offset needs X,Y,Z (finite, within 1e4 m), got '" + v + "'");
       }
       else if (a == "--mesh-like") {

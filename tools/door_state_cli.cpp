@@ -177,15 +177,8 @@ int main(int argc, char** argv) {
       else if (a == "--viewpoint") {
         viewpoint_arg = value();
         if (viewpoint_arg != "auto" && viewpoint_arg != "header" && viewpoint_arg != "none") {
-          std::vector<double> xyz;
-          std::size_t from = 0;
-          for (std::size_t comma; xyz.size() < 4; from = comma + 1) {
-            comma = viewpoint_arg.find(',', from);
-            xyz.push_back(dsr::tools::toDouble("--viewpoint", viewpoint_arg.substr(from, comma - from)));
-            if (comma == std::string::npos) break;
-          }
-          if (xyz.size() != 3)
-            throw UsageError("--viewpoint needs auto, header, none or X,Y,Z (three numbers), got '" + viewpoint_arg + "'");
+          double xyz[3];
+          dsr::tools::toXYZ("--viewpoint", viewpoint_arg, "auto, header, none or X,Y,Z (three numbers)", xyz);
           viewpoint_xyz = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
         }
       }
