@@ -67,6 +67,7 @@ options:
   --baseline-runs R         repetitions of the baseline (default: --runs)
   --accuracy-scenes K       extra laser rooms (seeds 1000..) and RGB-D frames scored once each (default 30; 0: none)
   --accuracy-points N       rays of those rooms (default 400000)
+  --only TEXT               time only the cases whose name contains TEXT (e.g. "320x240"; for profiling)
   --json PATH               where to write the results (default bench.json)
   --note TEXT               printed in the header and kept in the JSON (make bench: the git commit)
   -h, --help                this text
@@ -84,6 +85,7 @@ struct Options {
   std::size_t accuracy_points = 400000;
   std::string json_path = "bench.json";
   std::string note;
+  std::string only;  // keep the cases whose name contains this
 };
 
 struct UsageError : std::runtime_error {
@@ -123,6 +125,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--accuracy-points") o.accuracy_points = static_cast<std::size_t>(toInt(a, value()));
     else if (a == "--json") o.json_path = value();
     else if (a == "--note") o.note = value();
+    else if (a == "--only") o.only = value();
     else if (a == "--sizes") {
       o.sizes.clear();
       std::stringstream ss(value());
@@ -469,6 +472,10 @@ int main(int argc, char** argv) {
     if (!seeds.empty() && opt.robot)
       cases.push_back({"rgbd", 320 * 240, seeds.front(), {seeds.begin() + 1, seeds.end()}, true, 320, 240});
   }
+  if (!opt.only.empty())
+    cases.erase(std::remove_if(cases.begin(), cases.end(),
+                               [&](const Case& c) { return c.name().find(opt.only) == std::string::npos; }),
+                cases.end());
 
   json machine = {{"cpus", sysconf(_SC_NPROCESSORS_ONLN)},
                   {"cpu", shell("lscpu | sed -n 's/^Model name: *//p' | head -n1")},
