@@ -32,13 +32,28 @@ std::optional<Pinhole> fitPinhole(const pcl::PointCloud<pcl::PointXYZ>& cloud, c
       sample.push_back({Eigen::Vector2d((c - cu) / sc, (r - cv) / sc), X});
     }
   if (sample.size() < 100) return std::nullopt;
+  // A^T A as the sum over the samples of a a^T + b b^T, a = (X, 0, -u X)
+  // and b = (0, X, -v X): only the terms of its nonzero blocks are added
+  // (a term of zeros adds +-0, which leaves every sum as it is: a sum
+  // starting at +0 is never -0), and only on and above the diagonal, the
+  // rest mirrored (the same terms in the same order): the same sums.
   Eigen::Matrix<double, 9, 9> ata = Eigen::Matrix<double, 9, 9>::Zero();
   for (const auto& [uv, X] : sample) {
-    Eigen::Matrix<double, 9, 1> a, b;
-    a << X, Eigen::Vector3d::Zero(), -uv.x() * X;
-    b << Eigen::Vector3d::Zero(), X, -uv.y() * X;
-    ata += a * a.transpose() + b * b.transpose();
+    const Eigen::Vector3d au = -uv.x() * X, bv = -uv.y() * X;  // the last three of a and of b
+    for (int i = 0; i < 3; ++i) {
+      for (int j = i; j < 3; ++j) {
+        ata(i, j) += X(i) * X(j);
+        ata(3 + i, 3 + j) += X(i) * X(j);
+        ata(6 + i, 6 + j) += au(i) * au(j) + bv(i) * bv(j);
+      }
+      for (int j = 0; j < 3; ++j) {
+        ata(i, 6 + j) += X(i) * au(j);
+        ata(3 + i, 6 + j) += X(i) * bv(j);
+      }
+    }
   }
+  for (int i = 0; i < 9; ++i)
+    for (int j = i + 1; j < 9; ++j) ata(j, i) = ata(i, j);
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 9, 9>> es(ata);
   const Eigen::Matrix<double, 9, 1> m = es.eigenvectors().col(0);
   Eigen::Matrix3d M;
