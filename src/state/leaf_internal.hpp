@@ -142,7 +142,7 @@ struct LeafSearch {
   void axes(const HingeRun& w, std::vector<Eigen::Vector2d>& E, std::vector<Eigen::Vector2d>& K,
             std::vector<Eigen::Vector2d>& P) const;
   template <class F>
-  void forArc(const HingeRun& w, double lo, double hi, F&& f, int first = 0, int last = -1) const;
+  void forArc(const HingeRun& w, double inv_step, double lo, double hi, F&& f, int first = 0, int last = -1) const;
   void scorePoints(HingeRun& w) const;
   void markRays(const HingeRun& w, const std::vector<char>* need, std::size_t r0, std::size_t r1,
                 std::vector<char>& blocked) const;

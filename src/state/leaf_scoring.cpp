@@ -79,16 +79,19 @@ void LeafSearch::axes(const HingeRun& w, std::vector<Eigen::Vector2d>& E, std::v
 }
 
 // f(i) for every angle start + i step of w within [lo, hi] degrees, modulo
-// 360, and with i in [first, last] (f is not called outside it).
+// 360, and with i in [first, last] (f is not called outside it). inv_step:
+// 1 / w.step (the steps searched, 2 and 0.5 deg, are powers of two: their
+// inverse multiplies exactly as they divide; any other would move an index
+// by a rounding, far inside its 1e-9 of slack).
 template <class F>
-void LeafSearch::forArc(const HingeRun& w, double lo, double hi, F&& f, int first, int last) const {
+void LeafSearch::forArc(const HingeRun& w, double inv_step, double lo, double hi, F&& f, int first, int last) const {
   if (last < 0) last = w.count - 1;
   const double end = w.start + (w.count - 1) * w.step;
   for (double shift = -360; shift <= 360; shift += 360) {
     const double a = lo + shift, b = hi + shift;
     if (b < w.start - w.step || a > end + w.step) continue;  // no angle of the run
-    const int i0 = std::max(first, util::ceilToInt((a - w.start) / w.step - 1e-9));
-    const int i1 = std::min(last, util::floorToInt((b - w.start) / w.step + 1e-9));
+    const int i0 = std::max(first, util::ceilToInt((a - w.start) * inv_step - 1e-9));
+    const int i1 = std::min(last, util::floorToInt((b - w.start) * inv_step + 1e-9));
     for (int i = i0; i <= i1; ++i) f(i);
   }
 }
@@ -98,6 +101,7 @@ void LeafSearch::scorePoints(HingeRun& w) const {
   w.sup.assign(static_cast<std::size_t>(w.count) * na_max, 0);
   std::vector<Eigen::Vector2d> E, K, P;
   axes(w, E, K, P);
+  const double end = w.start + (w.count - 1) * w.step, deg = 180 / M_PI, inv_step = 1 / w.step;
   for (const Local& q : pts) {
     const Eigen::Vector2d r(q.s - w.s_h, q.d - w.d_h);
     const double rho = r.norm();
@@ -116,17 +120,20 @@ void LeafSearch::scorePoints(HingeRun& w) const {
     // b = rho sin(th - c) lies in [-tol, lt + tol] only for th - c within
     // [-asin(tol / rho), asin((lt + tol) / rho)].
     const double c = fastAtan2Deg(w.m * r.y(), w.e0 * r.x());
+    // tol / rho and band_hw / rho by one division: each off by a rounding
+    // at most, which moves the arc far less than kBearingSlackDeg (and the
+    // choice below only by as little): the same angles pass.
+    const double inv_rho = 1 / rho, x_below = tol * inv_rho, x_above = band_hw * inv_rho;
     // A short run of angles (the local search) often lies wholly inside
     // that arc: x <= asin(x) tells so without asin (testing more angles
     // than the arc holds is always safe; the test decides).
-    const double end = w.start + (w.count - 1) * w.step, deg = 180 / M_PI;
-    if (c - tol / rho * deg <= w.start && c + band_hw / rho * deg >= end) {
+    if (c - x_below * deg <= w.start && c + x_above * deg >= end) {
       for (int ai = 0; ai < w.count; ++ai) test(ai);
       continue;
     }
-    const double below = asinAbove(tol / rho) * 180 / M_PI + kBearingSlackDeg;
-    const double above = asinAbove(band_hw / rho) * 180 / M_PI + kBearingSlackDeg;
-    forArc(w, c - below, c + above, test);
+    const double below = asinAbove(x_below) * deg + kBearingSlackDeg;
+    const double above = asinAbove(x_above) * deg + kBearingSlackDeg;
+    forArc(w, inv_step, c - below, c + above, test);
   }
 }
 
@@ -149,6 +156,7 @@ void LeafSearch::markRays(const HingeRun& w, const std::vector<char>* need, std:
   int needed = 0;
   for (int ai = first; ai <= last; ++ai) needed += !need || (*need)[ai];
   const bool outright = needed <= kOutrightAngles;
+  const double inv_step = 1 / w.step;
   for (std::size_t ri = r0; ri < r1; ++ri) {
     const Ray& ray = rays[ri];
     // The part of the ray that counts: from the sensor to 6 cm before its point.
@@ -195,7 +203,7 @@ void LeafSearch::markRays(const HingeRun& w, const std::vector<char>* need, std:
     // The leaf's mid-line passes a point X of the chord (bearing c, distance
     // rho) at th = c + asin(lt / 2 / rho): the arc widens on one side only.
     const double dl = asinAbove(std::min(1.0, lt / 2 / rho_min)) * 180 / M_PI + kBearingSlackDeg;
-    forArc(w, lo - kBearingSlackDeg, hi + dl, test, first, last);
+    forArc(w, inv_step, lo - kBearingSlackDeg, hi + dl, test, first, last);
   }
 }
 
