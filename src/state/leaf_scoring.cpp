@@ -12,6 +12,10 @@
 #include <limits>
 #include <vector>
 
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#include <immintrin.h>
+#endif
+
 namespace dsr {
 namespace state {
 namespace detail {
@@ -96,44 +100,137 @@ void LeafSearch::forArc(const HingeRun& w, double inv_step, double lo, double hi
   }
 }
 
+namespace {
+
+// A point's distance from the hinge and the arc of angles (deg) at which
+// it can lie in the leaf's band (see scorePoints), for points of a chunk:
+// rho; the arc's ends without asin (slo, shi: the short-run test) and with
+// it, widened by kBearingSlackDeg (lo, hi). Whether and how they are used
+// is decided by rho. Four points at a time with AVX2 (no FMA: the same
+// operations in the same order as arcsScalar, lane by lane the same bits).
+struct Arcs {
+  static constexpr std::size_t kChunk = 256;
+  double rho[kChunk], slo[kChunk], shi[kChunk], lo[kChunk], hi[kChunk];
+};
+struct ArcFrame {  // one hinge's: its position, closed direction and swing side, the band's widths
+  double s_h, d_h, e0, m, tol, band_hw;
+};
+constexpr double kDeg = 180 / M_PI;
+
+inline void arcsScalar(const Local* q, std::size_t k0, std::size_t n, const ArcFrame& f, Arcs& out) {
+  for (std::size_t k = k0; k < n; ++k) {
+    const Eigen::Vector2d r(q[k].s - f.s_h, q[k].d - f.d_h);
+    const double rho = r.norm();
+    // b = rho sin(th - c) lies in [-tol, lt + tol] only for th - c within
+    // [-asin(tol / rho), asin((lt + tol) / rho)].
+    const double c = fastAtan2Deg(f.m * r.y(), f.e0 * r.x());
+    // tol / rho and band_hw / rho by one division: each off by a rounding
+    // at most, which moves the arc far less than kBearingSlackDeg (and the
+    // short-run test only by as little): the same angles pass.
+    const double inv_rho = 1 / rho, x_below = f.tol * inv_rho, x_above = f.band_hw * inv_rho;
+    out.rho[k] = rho;
+    out.slo[k] = c - x_below * kDeg;
+    out.shi[k] = c + x_above * kDeg;
+    out.lo[k] = c - (asinAbove(x_below) * kDeg + kBearingSlackDeg);
+    out.hi[k] = c + (asinAbove(x_above) * kDeg + kBearingSlackDeg);
+  }
+}
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define DSR_LEAF_ARCS_AVX2 1
+__attribute__((target("avx2"))) inline __m256d asinAboveAvx2(__m256d x) {
+  // std::min(pi / 2, v): v where v < pi / 2, else pi / 2 (v is no NaN for x < 1); pi / 2 where x >= 1.
+  const __m256d one = _mm256_set1_pd(1.0), half_pi = _mm256_set1_pd(M_PI / 2);
+  const __m256d x2 = _mm256_mul_pd(x, x);
+  const __m256d v = _mm256_add_pd(
+      x, _mm256_div_pd(_mm256_mul_pd(x2, x), _mm256_mul_pd(_mm256_set1_pd(6.0), _mm256_sub_pd(one, x2))));
+  const __m256d below = _mm256_blendv_pd(half_pi, v, _mm256_cmp_pd(v, half_pi, _CMP_LT_OQ));
+  return _mm256_blendv_pd(below, half_pi, _mm256_cmp_pd(x, one, _CMP_GE_OQ));
+}
+__attribute__((target("avx2"))) void arcsAvx2(const Local* q, std::size_t n, const ArcFrame& f, Arcs& out) {
+  const __m256d s_h = _mm256_set1_pd(f.s_h), d_h = _mm256_set1_pd(f.d_h), e0 = _mm256_set1_pd(f.e0),
+                m = _mm256_set1_pd(f.m), tol = _mm256_set1_pd(f.tol), band_hw = _mm256_set1_pd(f.band_hw);
+  const __m256d sign = _mm256_set1_pd(-0.0), zero = _mm256_setzero_pd(), deg = _mm256_set1_pd(kDeg),
+                slack = _mm256_set1_pd(kBearingSlackDeg);
+  std::size_t k = 0;
+  for (; k + 4 <= n; k += 4) {
+    const __m256d rx = _mm256_sub_pd(_mm256_set_pd(q[k + 3].s, q[k + 2].s, q[k + 1].s, q[k].s), s_h);
+    const __m256d ry = _mm256_sub_pd(_mm256_set_pd(q[k + 3].d, q[k + 2].d, q[k + 1].d, q[k].d), d_h);
+    const __m256d rho = _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(rx, rx), _mm256_mul_pd(ry, ry)));
+    // fastAtan2Deg(m ry, e0 rx), step for step.
+    const __m256d y = _mm256_mul_pd(m, ry), x = _mm256_mul_pd(e0, rx);
+    const __m256d ax = _mm256_andnot_pd(sign, x), ay = _mm256_andnot_pd(sign, y);
+    // std::max(ax, ay) and std::min(ax, ay) (no NaN; equal values alike).
+    const __m256d ay_gt_ax = _mm256_cmp_pd(ay, ax, _CMP_GT_OQ);
+    const __m256d mx = _mm256_blendv_pd(ax, ay, _mm256_cmp_pd(ax, ay, _CMP_LT_OQ));
+    const __m256d mn = _mm256_blendv_pd(ax, ay, _mm256_cmp_pd(ay, ax, _CMP_LT_OQ));
+    const __m256d t = _mm256_div_pd(mn, mx), t2 = _mm256_mul_pd(t, t);
+    __m256d poly = _mm256_add_pd(_mm256_set1_pd(-0.0851330), _mm256_mul_pd(_mm256_set1_pd(0.0208351), t2));
+    poly = _mm256_add_pd(_mm256_set1_pd(0.1801410), _mm256_mul_pd(t2, poly));
+    poly = _mm256_add_pd(_mm256_set1_pd(-0.3302995), _mm256_mul_pd(t2, poly));
+    poly = _mm256_add_pd(_mm256_set1_pd(0.9998660), _mm256_mul_pd(t2, poly));
+    __m256d a = _mm256_mul_pd(t, poly);
+    a = _mm256_blendv_pd(a, _mm256_sub_pd(_mm256_set1_pd(M_PI / 2), a), ay_gt_ax);
+    a = _mm256_blendv_pd(a, _mm256_sub_pd(_mm256_set1_pd(M_PI), a), _mm256_cmp_pd(x, zero, _CMP_LT_OQ));
+    a = _mm256_blendv_pd(a, _mm256_xor_pd(a, sign), _mm256_cmp_pd(y, zero, _CMP_LT_OQ));
+    a = _mm256_mul_pd(a, deg);
+    const __m256d c = _mm256_blendv_pd(a, zero, _mm256_cmp_pd(mx, zero, _CMP_EQ_OQ));
+    const __m256d inv_rho = _mm256_div_pd(_mm256_set1_pd(1.0), rho);
+    const __m256d x_below = _mm256_mul_pd(tol, inv_rho), x_above = _mm256_mul_pd(band_hw, inv_rho);
+    _mm256_storeu_pd(out.rho + k, rho);
+    _mm256_storeu_pd(out.slo + k, _mm256_sub_pd(c, _mm256_mul_pd(x_below, deg)));
+    _mm256_storeu_pd(out.shi + k, _mm256_add_pd(c, _mm256_mul_pd(x_above, deg)));
+    _mm256_storeu_pd(out.lo + k, _mm256_sub_pd(c, _mm256_add_pd(_mm256_mul_pd(asinAboveAvx2(x_below), deg), slack)));
+    _mm256_storeu_pd(out.hi + k, _mm256_add_pd(c, _mm256_add_pd(_mm256_mul_pd(asinAboveAvx2(x_above), deg), slack)));
+  }
+  _mm256_zeroupper();
+  arcsScalar(q, k, n, f, out);
+}
+#endif
+
+void arcsOf(const Local* q, std::size_t n, const ArcFrame& f, Arcs& out) {
+#ifdef DSR_LEAF_ARCS_AVX2
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  if (avx2) return arcsAvx2(q, n, f, out);
+#endif
+  arcsScalar(q, 0, n, f, out);
+}
+
+}  // namespace
+
 void LeafSearch::scorePoints(HingeRun& w) const {
   std::vector<char> seen(w.count * cells, 0);  // per angle: leaf bin x z bin
   w.sup.assign(static_cast<std::size_t>(w.count) * na_max, 0);
   std::vector<Eigen::Vector2d> E, K, P;
   axes(w, E, K, P);
-  const double end = w.start + (w.count - 1) * w.step, deg = 180 / M_PI, inv_step = 1 / w.step;
-  for (const Local& q : pts) {
-    const Eigen::Vector2d r(q.s - w.s_h, q.d - w.d_h);
-    const double rho = r.norm();
-    if (rho > r_pts) continue;
-    auto test = [&](int ai) {
-      const double a = r.dot(E[ai]), b = r.dot(K[ai]);
-      if (a < 0.02 || a >= Lmax || b < -tol || b > lt + tol) return;
-      const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
-      char& f = seen[ai * cells + static_cast<std::size_t>(ab) * nz + q.zbin];
-      if (!f) f = 1, ++w.sup[static_cast<std::size_t>(ai) * na_max + ab];
-    };
-    if (rho <= band_hw) {
-      for (int ai = 0; ai < w.count; ++ai) test(ai);
-      continue;
+  const double end = w.start + (w.count - 1) * w.step, inv_step = 1 / w.step;
+  const ArcFrame frame{w.s_h, w.d_h, w.e0, w.m, tol, band_hw};
+  Arcs arcs;
+  for (std::size_t k0 = 0; k0 < pts.size(); k0 += Arcs::kChunk) {
+    const std::size_t n = std::min(Arcs::kChunk, pts.size() - k0);
+    arcsOf(pts.data() + k0, n, frame, arcs);
+    for (std::size_t k = 0; k < n; ++k) {
+      const Local& q = pts[k0 + k];
+      const double rho = arcs.rho[k];
+      if (rho > r_pts) continue;
+      const Eigen::Vector2d r(q.s - w.s_h, q.d - w.d_h);
+      auto test = [&](int ai) {
+        const double a = r.dot(E[ai]), b = r.dot(K[ai]);
+        if (a < 0.02 || a >= Lmax || b < -tol || b > lt + tol) return;
+        const int ab = std::min(na_max - 1, static_cast<int>(a / abin));
+        char& f = seen[ai * cells + static_cast<std::size_t>(ab) * nz + q.zbin];
+        if (!f) f = 1, ++w.sup[static_cast<std::size_t>(ai) * na_max + ab];
+      };
+      // Near the hinge, and where a short run of angles (the local search)
+      // lies wholly inside the arc (x <= asin(x) tells so without asin),
+      // every angle is tested (testing more angles than the arc holds is
+      // always safe; the test decides).
+      if (rho <= band_hw || (arcs.slo[k] <= w.start && arcs.shi[k] >= end)) {
+        for (int ai = 0; ai < w.count; ++ai) test(ai);
+        continue;
+      }
+      forArc(w, inv_step, arcs.lo[k], arcs.hi[k], test);
     }
-    // b = rho sin(th - c) lies in [-tol, lt + tol] only for th - c within
-    // [-asin(tol / rho), asin((lt + tol) / rho)].
-    const double c = fastAtan2Deg(w.m * r.y(), w.e0 * r.x());
-    // tol / rho and band_hw / rho by one division: each off by a rounding
-    // at most, which moves the arc far less than kBearingSlackDeg (and the
-    // choice below only by as little): the same angles pass.
-    const double inv_rho = 1 / rho, x_below = tol * inv_rho, x_above = band_hw * inv_rho;
-    // A short run of angles (the local search) often lies wholly inside
-    // that arc: x <= asin(x) tells so without asin (testing more angles
-    // than the arc holds is always safe; the test decides).
-    if (c - x_below * deg <= w.start && c + x_above * deg >= end) {
-      for (int ai = 0; ai < w.count; ++ai) test(ai);
-      continue;
-    }
-    const double below = asinAbove(x_below) * deg + kBearingSlackDeg;
-    const double above = asinAbove(x_above) * deg + kBearingSlackDeg;
-    forArc(w, inv_step, c - below, c + above, test);
   }
 }
 
