@@ -7,6 +7,10 @@
 #include <limits>
 #include <vector>
 
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#include <immintrin.h>
+#endif
+
 namespace dsr {
 
 namespace {
@@ -16,28 +20,65 @@ namespace {
 // but no room is a kilometre across.
 constexpr double kCameraMedianRangeMax = 30.0, kScanMedianRangeMax = 1000.0;
 constexpr std::size_t kSample = 20000;  // points sampled for the ranges
+
+bool finitePoint(const pcl::PointXYZ& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
+
+// The points of [p, p + n) with x, y and z finite, counted.
+std::size_t countFiniteScalar(const pcl::PointXYZ* p, std::size_t n) {
+  std::size_t finite = 0;
+  for (std::size_t i = 0; i < n; ++i) finite += finitePoint(p[i]);
+  return finite;
+}
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define DSR_COUNT_FINITE_AVX2 1
+// Two points (x, y, z and the padding) at a time with AVX2: a float is
+// finite exactly where its magnitude is at most FLT_MAX (a NaN compares false).
+__attribute__((target("avx2"))) std::size_t countFiniteAvx2(const pcl::PointXYZ* p, std::size_t n) {
+  static_assert(sizeof(pcl::PointXYZ) == 4 * sizeof(float), "PointXYZ: x, y, z and a float of padding");
+  const __m256 magnitude = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+  const __m256 largest = _mm256_set1_ps(std::numeric_limits<float>::max());
+  std::size_t finite = 0, i = 0;
+  for (; i + 2 <= n; i += 2) {
+    const __m256 v = _mm256_loadu_ps(p[i].data);
+    const int bits = _mm256_movemask_ps(_mm256_cmp_ps(_mm256_and_ps(v, magnitude), largest, _CMP_LE_OQ));
+    finite += static_cast<std::size_t>((bits & 0x7) == 0x7) + static_cast<std::size_t>((bits & 0x70) == 0x70);
+  }
+  return finite + countFiniteScalar(p + i, n - i);
+}
+#endif
+
+std::size_t countFinite(const pcl::PointCloud<pcl::PointXYZ>& cloud) {
+#ifdef DSR_COUNT_FINITE_AVX2
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  if (avx2) return countFiniteAvx2(cloud.points.data(), cloud.points.size());
+#endif
+  return countFiniteScalar(cloud.points.data(), cloud.points.size());
+}
 }  // namespace
 
 std::optional<std::string> implausibleInput(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vector3d& viewpoint) {
   const bool organized = cloud.height > 1;
   const Eigen::Vector3f vp = viewpoint.cast<float>();
-  std::size_t finite = 0;
-  for (const auto& p : cloud.points) finite += std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+  const std::size_t finite = countFinite(cloud);
   if (finite < 20) return std::nullopt;  // too few points: the pipeline says so
   const std::size_t stride = std::max<std::size_t>(1, finite / kSample);
   std::vector<double> range;
   range.reserve(finite / stride + 1);
   float z_min = std::numeric_limits<float>::max(), z_max = -z_min;
-  std::size_t k = 0, at_sensor = 0;
+  std::size_t skip = 0, at_sensor = 0;  // skip: finite points before the next sampled one
   for (const auto& p : cloud.points) {
-    if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) continue;
+    if (!finitePoint(p)) continue;
     // The range's root only where it is used: a point at the sensor (below
     // 1 mm, so its square below 1e-5) and a sampled one.
     const float r2 = (p.getVector3fMap() - vp).squaredNorm();
     if (r2 < 1e-5f) at_sensor += static_cast<double>(std::sqrt(r2)) < 1e-3;
     z_min = std::min(z_min, p.z);
     z_max = std::max(z_max, p.z);
-    if (k++ % stride == 0) range.push_back(std::sqrt(r2));
+    if (skip-- == 0) {
+      range.push_back(std::sqrt(r2));
+      skip = stride - 1;
+    }
   }
   char buf[300];
   if (at_sensor * 100 >= finite * 99) {
