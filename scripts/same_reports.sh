@@ -12,6 +12,10 @@
 # to the folder too). WORKDIR (default: a temporary folder) keeps
 # the inputs and outputs.
 set -euo pipefail
+if [ $# -lt 2 ] || [ ! -x "$1/door_state_cli" ] || [ ! -x "$2/door_state_cli" ]; then
+  echo "usage: same_reports.sh OLD_BIN NEW_BIN [WORKDIR] (folders holding door_scene_sim and door_state_cli)" >&2
+  exit 2
+fi
 old=$(cd "$1" && pwd); new=$(cd "$2" && pwd)
 work=${3:-$(mktemp -d)}
 mkdir -p "$work/in" "$work/old" "$work/new"
