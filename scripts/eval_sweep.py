@@ -6,7 +6,7 @@ the merged figures as JSON (plus one line per scene with --verbose).
   scripts/eval_sweep.py [--sensor tls|rgbd|lidar16|lidar32|lidar64|lidar128] [--scenes N] [--first-seed S]
                         [--points N] [--viewpoints K] [--beyond-doors] [--no-handles] [--up AXIS] [--config FILE] [--jobs J]
                         [--merge] [--mesh-like N] [--voxel-map RES] [--clutter] [--partition] [--corridor]
-                        [--varied-doors] [--frame-offset X,Y,Z]
+                        [--varied-doors] [--max-angle DEG] [--frame-offset X,Y,Z]
                         [--depth-model M] [--robot-camera] [--verbose] [--out DIR]
 
 With --merge or --mesh-like the CLI gets the one merged cloud (VIEWPOINT 0 0 0,
@@ -26,6 +26,7 @@ def one(args, seed, out):
            "--out", str(prefix), "--formats", "pcd,json"] + (["--no-handles"] if args.no_handles else [])
     sim += [f"--{k}" for k in ("clutter", "partition", "corridor") if getattr(args, k)]
     sim += ["--varied-doors"] if args.varied_doors else []
+    sim += ["--max-angle", str(args.max_angle)] if args.max_angle is not None else []
     merged = args.merge or args.mesh_like > 0 or args.voxel_map > 0
     sim += ["--merge"] if args.merge else []
     sim += ["--frame-offset", args.frame_offset] if args.frame_offset else []
@@ -78,6 +79,8 @@ def main():
     ap.add_argument("--partition", action="store_true", help="random rooms with a bathroom (door_scene_sim --partition)")
     ap.add_argument("--varied-doors", action="store_true",
                     help="door joinery varied per room, a third without casing (door_scene_sim --varied-doors)")
+    ap.add_argument("--max-angle", type=float, default=None, metavar="DEG",
+                    help="doors opened at random up to DEG (door_scene_sim --max-angle; default 130)")
     ap.add_argument("--corridor", action="store_true", help="corridors (door_scene_sim --corridor)")
     ap.add_argument("--depth-model", default=None, choices=["default", "structured", "tof", "stereo"],
                     help="RGB-D depth error of a camera family (door_scene_sim --depth-model)")
@@ -136,6 +139,7 @@ def main():
         summary.update(points=args.points, viewpoints=args.viewpoints, beyond_doors=args.beyond_doors,
                        merge=args.merge, mesh_like=args.mesh_like, voxel_map=args.voxel_map)
     summary.update({k: True for k in ("clutter", "partition", "corridor", "varied_doors") if getattr(args, k)})
+    summary.update({"max_angle": args.max_angle} if args.max_angle is not None else {})
     print(json.dumps(summary, indent=1))
 
 if __name__ == "__main__":

@@ -31,7 +31,9 @@ OctoMap or voxel SLAM map exports it). -clutter-,
 -partition- or -corridor- before the seed give the random rooms those options
 (e.g. merged3-400k-clutter-SEED, tls-400k-clutter-SEED); -varied- before
 the seed varies the door joinery (door_scene_sim --varied-doors: a third of
-rooms without casing). EVAL_SCENES=N runs N
+rooms without casing); -ajar- before the seed opens the doors at random up
+to 30 deg only (door_scene_sim --max-angle 30: leaves ajar, the least a
+leaf shows of a doorway). EVAL_SCENES=N runs N
 scenes per sweep instead of 30.
 RGB-D camera families (not in the default list): rgbd-structured-SEED,
 rgbd-tof-SEED, rgbd-stereo-SEED (door_scene_sim --depth-model), and
@@ -83,6 +85,7 @@ def sweep_args(name, config_dir):
                 "--first-seed", seed]
     args += [f"--{k}" for k in ("clutter", "partition", "corridor") if k in parts]
     args += ["--varied-doors"] if "varied" in parts else []
+    args += ["--max-angle", "30"] if "ajar" in parts else []
     if os.environ.get("EVAL_SCENES"):
         args += ["--scenes", os.environ["EVAL_SCENES"]]
     if "nohandles" in parts:
