@@ -416,6 +416,17 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       // alone is no evidence there.
       const bool at_wall_end = d.s0 <= wall.s_min + kWallEndSlack || d.s1 >= wall.s_max - kWallEndSlack;
       const bool band_evidence = leaf.coverage > kClosedBandEvidence && !(organized && at_wall_end);
+      // Or a leaf swung away by a little, that fills its own doorway just
+      // behind the wall's plane: ajar by less than about 25 deg, it lets no
+      // ray through (the gap at its latch narrower than the rays' spacing
+      // there) and, without trim on the sensor's side, nothing else speaks
+      // for the door; yet a door-wide, door-tall panel hinged at one jamb
+      // and slanting into the reveal is what a leaf ajar is (a niche's back
+      // or a recess between cupboards stands parallel to the wall). As for a
+      // closed leaf's band, not at the end of a camera's wall (its own end
+      // off a plane tilted by depth noise).
+      const bool own_leaf_fills = !leaf.closed_in_band && !leaf.toward_viewer && d.recess >= kOwnLeafFront &&
+                                  leaf.coverage >= kOwnLeafCoverage * leaf.sampling && !(organized && at_wall_end);
       // Seen through only above 0.8 m (what is below hidden or solid) is a
       // window over a sill, or a gap over furniture: a doorway's opening runs
       // down to the floor, and the rays through it do too.
@@ -433,7 +444,7 @@ DoorStage findDoors(const segmentation::Points& pts, const std::vector<segmentat
       }
       const bool evidence = d.shadow_end ? own_leaf_hides
                             : closed ? (d.casing || d.recess > 0.3 || set_back || band_evidence)
-                                     : (d.casing || seen_through || own_leaf_hides);
+                                     : (d.casing || seen_through || own_leaf_hides || own_leaf_fills);
       // A closed leaf whose foot is hidden by something standing right in
       // front of it is a blocked front, not a door.
       const Foot foot = closed ? footOf(pts, wall, leaf, floor_z, p.leaf_thickness, p.face_tolerance) : Foot{1, 0};
