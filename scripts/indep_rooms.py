@@ -6,7 +6,7 @@ swing-side face, 1-2 doors each opening onto a corridor or a room), its own
 analytic ray caster (oriented boxes, slab test), a terrestrial scanner at two
 stations 1.0-1.8 m high, 400k rays each, 3 mm range noise.
 
-  scripts/indep_rooms.py --seed N --out PREFIX [--rays 400000] [--stats]
+  /usr/bin/python3 scripts/indep_rooms.py --seed N --out PREFIX [--rays 400000] [--stats]
       [--angle DEG] [--mode flush|centred] [--swing into|away] [--casing 0|1]
       [--handle 0|1] [--casing-side swing|room|both] [--single]
 

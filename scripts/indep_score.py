@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Scores door_state_cli's reports on scripts/indep_rooms.py's rooms.
 
-  scripts/indep_score.py DIR KIND FIRST LAST [-v]
+  /usr/bin/python3 scripts/indep_score.py DIR KIND FIRST LAST [-v]
 
 DIR holds sN.truth.json (indep_rooms.py --out DIR/sN) and the reports
 sN.KIND.json for seeds FIRST..LAST, KIND a name of your choosing (single:
@@ -11,12 +11,14 @@ recall, precision, the matched doors in the right state (over measured
 leaves alone), the angle error of measured leaves; with -v each miss, wrong
 state or angle error over 5 deg, and false report. For example:
 
-  for s in $(seq 1 30); do
-    scripts/indep_rooms.py --seed $s --out /tmp/ir/s$s
+  mkdir -p /tmp/ir; for s in $(seq 1 30); do
+    /usr/bin/python3 scripts/indep_rooms.py --seed $s --out /tmp/ir/s$s
     build/bin/door_state_cli --json /tmp/ir/s$s.single.json /tmp/ir/s$s.s0.pcd
     build/bin/door_state_cli --json /tmp/ir/s$s.merged.json /tmp/ir/s$s.merged.pcd
   done
-  scripts/indep_score.py /tmp/ir single 1 30; scripts/indep_score.py /tmp/ir merged 1 30
+  /usr/bin/python3 scripts/indep_score.py /tmp/ir single 1 30   # and merged
+
+(indep_rooms.py needs numpy: Debian's python3-numpy, hence /usr/bin/python3)
 """
 import json, sys, math, os
 base, kind, a, b = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
